@@ -1,0 +1,87 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "groom/groom.hh"
+#include "groom/metrics.hh"
+
+using namespace hairdyn;
+
+namespace {
+
+/* Two straight strands of 3 and 4 points along +z. */
+struct TwoStrands {
+  std::vector<int32_t> offsets{0, 3, 7};
+  std::vector<vec3> positions;
+  TwoStrands()
+  {
+    for (int i = 0; i < 3; i++) {
+      positions.emplace_back(0.0f, 0.0f, 0.1f * float(i));
+    }
+    for (int i = 0; i < 4; i++) {
+      positions.emplace_back(1.0f, 0.0f, 0.1f * float(i));
+    }
+  }
+};
+
+}  // namespace
+
+TEST(Groom, ValidGroomHasNoError)
+{
+  const TwoStrands g;
+  EXPECT_EQ(find_groom_error(g.offsets, g.positions), "");
+  EXPECT_EQ(curve_points(g.offsets, 1).start, 3);
+  EXPECT_EQ(curve_points(g.offsets, 1).size, 4);
+}
+
+TEST(Groom, OffsetsMustStartAtZeroAndMatchCount)
+{
+  TwoStrands g;
+  g.offsets = {1, 3, 7};
+  EXPECT_NE(find_groom_error(g.offsets, g.positions).find("start at 0"), std::string::npos);
+  g.offsets = {0, 3, 6};
+  EXPECT_NE(find_groom_error(g.offsets, g.positions).find("7 points"), std::string::npos);
+  g.offsets = {0};
+  EXPECT_EQ(find_groom_error(g.offsets, g.positions), "the hair has no strands");
+}
+
+TEST(Groom, OffsetsMustBeMonotone)
+{
+  TwoStrands g;
+  g.offsets = {0, 5, 4, 7};
+  EXPECT_NE(find_groom_error(g.offsets, g.positions).find("decrease at strand 1"),
+            std::string::npos);
+}
+
+TEST(Groom, SinglePointStrandIsAnError)
+{
+  TwoStrands g;
+  g.offsets = {0, 1, 7};
+  EXPECT_NE(find_groom_error(g.offsets, g.positions).find("strand 0 has 1 point"),
+            std::string::npos);
+}
+
+TEST(Groom, NonFiniteAndZeroLengthAreErrors)
+{
+  TwoStrands g;
+  g.positions[4].y = NAN;
+  EXPECT_NE(find_groom_error(g.offsets, g.positions).find("point 4"), std::string::npos);
+  g = TwoStrands();
+  g.positions[5] = g.positions[4];
+  EXPECT_NE(find_groom_error(g.offsets, g.positions).find("strand 1 has a zero-length segment"),
+            std::string::npos);
+}
+
+TEST(Metrics, StretchAndNonFinite)
+{
+  const TwoStrands rest;
+  TwoStrands now;
+  EXPECT_EQ(max_relative_stretch(rest.offsets, rest.positions, now.positions), 0.0f);
+  now.positions[6].z += 0.05f; /* last segment 0.1 -> 0.15 */
+  EXPECT_NEAR(max_relative_stretch(rest.offsets, rest.positions, now.positions), 0.5f, 1e-5f);
+  EXPECT_EQ(count_nonfinite(now.positions), 0);
+  now.positions[2].x = INFINITY;
+  now.positions[3].z = NAN;
+  EXPECT_EQ(count_nonfinite(now.positions), 2);
+  EXPECT_TRUE(std::isinf(max_relative_stretch(rest.offsets, rest.positions, now.positions)));
+}

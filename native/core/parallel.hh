@@ -1,0 +1,34 @@
+#pragma once
+/* Parallel loops with a grain size. The partition is static, so a result never depends on
+ * the thread count or on scheduling: bakes are byte-identical run to run. */
+#include <algorithm>
+#include <cstdint>
+
+#include "core/span.hh"
+
+namespace hairdyn {
+
+/* Calls fn(IndexRange) over chunks of at least `grain` items covering [0, size). */
+template<typename Fn> void parallel_for(int64_t size, int64_t grain, const Fn &fn)
+{
+  if (size <= 0) {
+    return;
+  }
+  grain = std::max<int64_t>(grain, 1);
+  const int64_t chunks = (size + grain - 1) / grain;
+  if (chunks == 1) {
+    fn(IndexRange{0, size});
+    return;
+  }
+#pragma omp parallel for schedule(static)
+  for (int64_t chunk = 0; chunk < chunks; chunk++) {
+    const int64_t start = chunk * grain;
+    fn(IndexRange{start, std::min(grain, size - start)});
+  }
+}
+
+/* Number of threads parallel_for uses; 0 restores the default (all cores). */
+void set_thread_num(int thread_num);
+int thread_num();
+
+}  // namespace hairdyn

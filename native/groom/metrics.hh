@@ -1,0 +1,15 @@
+#pragma once
+/* Quality figures every solver reports through the headless entry point. */
+#include "core/math.hh"
+#include "core/span.hh"
+
+namespace hairdyn {
+
+/* Largest |l / l_rest - 1| over all segments: 0 means no strand stretched or shrank. */
+float max_relative_stretch(Span<int32_t> curve_offsets, Span<vec3> rest_positions,
+                           Span<vec3> positions);
+
+/* Number of points with a NaN or infinite coordinate. */
+int64_t count_nonfinite(Span<vec3> positions);
+
+}  // namespace hairdyn
