@@ -1,0 +1,45 @@
+#pragma once
+/* Shared checks for everything that crosses into the core: numpy arrays become spans over the
+ * same memory after dtype, shape, contiguity and finiteness checks; anything wrong raises
+ * ValueError with a sentence that names the argument. Each native area binds itself in its
+ * own file through one bind_<area>(module) function, called from module.cpp. */
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <string>
+
+#include "collision/mesh.hh"
+#include "core/math.hh"
+#include "core/span.hh"
+
+namespace hairdyn::bindings {
+
+namespace py = pybind11;
+
+[[noreturn]] void fail(const std::string &message);
+
+/* A C-contiguous numpy array of `dtype` with shape (rows, columns), or (rows,) when columns
+ * is 0. */
+py::array check_array(py::handle obj, const char *name, const py::dtype &dtype,
+                      const char *dtype_name, int64_t columns);
+/* (N, 3) float32, all finite. */
+Span<vec3> as_float3(py::handle obj, const char *name);
+/* (N, 3) float32, values not checked (for outputs and for measuring broken states). */
+Span<vec3> as_float3_unchecked(py::handle obj, const char *name);
+/* (N, 3) int32. */
+Span<ivec3> as_int3(py::handle obj, const char *name);
+/* (N,) int32. */
+Span<int32_t> as_int(py::handle obj, const char *name);
+/* (N,) float32, all finite. */
+Span<float> as_float(py::handle obj, const char *name);
+/* A 4x4 matrix in Blender's row-major order (numpy.array(obj.matrix_world)), any float dtype. */
+mat4 as_matrix(py::handle obj, const char *name);
+/* Raises "Invalid hair: ..." unless the strands can be simulated. */
+void check_groom(Span<int32_t> curve_offsets, Span<vec3> positions);
+/* A read-only numpy (N, 3) float32 view of `span`; `owner` lives as long as the view. */
+py::array float3_view(Span<vec3> span, py::handle owner);
+
+void bind_groom(py::module_ &m);
+void bind_collision(py::module_ &m);
+
+}  // namespace hairdyn::bindings

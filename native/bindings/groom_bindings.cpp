@@ -1,0 +1,86 @@
+/* Bindings of native/groom: validation, metrics, the follow-head baseline. */
+#include "bindings/arrays.hh"
+
+#include "core/parallel.hh"
+#include "groom/follow.hh"
+#include "groom/groom.hh"
+#include "groom/metrics.hh"
+
+namespace hairdyn::bindings {
+
+void bind_groom(py::module_ &m)
+{
+  m.def(
+      "buffer_address",
+      [](const py::handle positions) {
+        return reinterpret_cast<uintptr_t>(as_float3(positions, "positions").data());
+      },
+      "Address of the memory the core reads for an (N, 3) float32 array (proves zero-copy).");
+
+  m.def(
+      "validate_groom",
+      [](const py::handle curve_offsets, const py::handle positions) {
+        check_groom(as_int(curve_offsets, "curve_offsets"), as_float3(positions, "positions"));
+      },
+      py::arg("curve_offsets"), py::arg("positions"),
+      "Raise ValueError with a sentence if the strands cannot be simulated.");
+
+  m.def(
+      "max_relative_stretch",
+      [](const py::handle curve_offsets, const py::handle rest_positions,
+         const py::handle positions) {
+        const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+        const Span<vec3> rest = as_float3(rest_positions, "rest_positions");
+        const Span<vec3> now = as_float3_unchecked(positions, "positions");
+        check_groom(offsets, rest);
+        if (now.size() != rest.size()) {
+          fail("positions and rest_positions must have the same number of points");
+        }
+        py::gil_scoped_release release;
+        return max_relative_stretch(offsets, rest, now);
+      },
+      py::arg("curve_offsets"), py::arg("rest_positions"), py::arg("positions"),
+      "Largest relative change of a segment length (0 = no stretch; inf if a point is NaN).");
+
+  m.def(
+      "count_nonfinite",
+      [](const py::handle positions) {
+        return count_nonfinite(as_float3_unchecked(positions, "positions"));
+      },
+      py::arg("positions"), "Number of points with a NaN or infinite coordinate.");
+
+  m.def("set_thread_num", &set_thread_num, py::arg("thread_num"),
+        "Threads the solvers use; 0 means all cores.");
+  m.def("thread_num", &thread_num);
+
+  py::class_<FollowSolver>(m, "FollowSolver",
+                           "Kinematic baseline: strands carried rigidly by the head.")
+      .def(py::init([](const py::handle curve_offsets, const py::handle rest_positions_wo,
+                       const py::handle head_to_world_rest) {
+             const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+             const Span<vec3> rest = as_float3(rest_positions_wo, "rest_positions_wo");
+             check_groom(offsets, rest);
+             const mat4 head = as_matrix(head_to_world_rest, "head_to_world_rest");
+             py::gil_scoped_release release;
+             return new FollowSolver(offsets, rest, head);
+           }),
+           py::arg("curve_offsets"), py::arg("rest_positions_wo"), py::arg("head_to_world_rest"))
+      .def(
+          "step",
+          [](FollowSolver &self, const py::handle head_to_world) {
+            const mat4 head = as_matrix(head_to_world, "head_to_world");
+            py::gil_scoped_release release;
+            self.step(head);
+          },
+          py::arg("head_to_world"), "Place the strands for the head's current transform.")
+      .def("reset", &FollowSolver::reset, py::call_guard<py::gil_scoped_release>())
+      .def_property_readonly(
+          "positions",
+          [](py::object self) { return float3_view(self.cast<FollowSolver &>().positions(), self); },
+          "World-space positions (N, 3) float32: a read-only view of the solver's buffer.")
+      .def_property_readonly("rest_positions", [](py::object self) {
+        return float3_view(self.cast<FollowSolver &>().rest_positions(), self);
+      });
+}
+
+}  // namespace hairdyn::bindings

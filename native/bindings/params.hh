@@ -1,0 +1,138 @@
+#pragma once
+/* Binds a self-describing parameter struct (see core/params.hh): attributes with range checks
+ * on assignment, keyword construction, and a `fields()` table for the add-on's tests. */
+#include <pybind11/pybind11.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
+#include "core/params.hh"
+
+namespace hairdyn::bindings {
+
+namespace py = pybind11;
+
+template<typename T> std::string check_range(const T value, const ParamInfo &info)
+{
+  const double v = double(value);
+  if (!std::isfinite(v) || v < info.min || v > info.max) {
+    std::ostringstream msg;
+    msg << info.name << " (" << (info.symbol[0] ? info.symbol : info.name) << ") must be";
+    if (std::isfinite(info.min) && std::isfinite(info.max)) {
+      msg << " between " << info.min << " and " << info.max;
+    }
+    else if (std::isfinite(info.min)) {
+      msg << " at least " << info.min;
+    }
+    else if (std::isfinite(info.max)) {
+      msg << " at most " << info.max;
+    }
+    else {
+      msg << " a finite number";
+    }
+    if (info.unit[0]) {
+      msg << " " << info.unit;
+    }
+    msg << ", not " << v;
+    return msg.str();
+  }
+  return {};
+}
+
+/* Python value -> field value, with a ValueError that names the field. */
+template<typename T> T convert_field(const py::handle value, const ParamInfo &info)
+{
+  T result{};
+  try {
+    if constexpr (std::is_enum_v<T>) {
+      result = T(py::cast<int32_t>(value));
+    }
+    else {
+      result = py::cast<T>(value);
+    }
+  }
+  catch (const py::cast_error &) {
+    throw py::value_error(std::string(info.name) + " must be a number, not " +
+                          std::string(py::str(py::repr(value))));
+  }
+  if constexpr (std::is_enum_v<T>) {
+    const std::string error = check_range(int32_t(result), info);
+    if (!error.empty()) {
+      throw py::value_error(error + " (choices: " + info.choices + ")");
+    }
+  }
+  else if constexpr (!std::is_same_v<T, bool>) {
+    const std::string error = check_range(result, info);
+    if (!error.empty()) {
+      throw py::value_error(error);
+    }
+  }
+  return result;
+}
+
+/* Registers `Params` as a Python class `name` with one checked attribute per field,
+ * `Params(**fields)`, `to_dict()` and the static `fields()` table (name, symbol, unit, min,
+ * max, default, description, choices). */
+template<typename Params> py::class_<Params> bind_params(py::module_ &m, const char *name,
+                                                        const char *doc)
+{
+  py::class_<Params> cls(m, name, doc);
+  Params::for_each_field([&](auto member, const ParamInfo &info) {
+    using T = std::remove_reference_t<decltype(std::declval<Params &>().*member)>;
+    cls.def_property(
+        info.name,
+        [member](const Params &self) {
+          if constexpr (std::is_enum_v<T>) {
+            return int32_t(self.*member);
+          }
+          else {
+            return self.*member;
+          }
+        },
+        [member, info](Params &self, const py::handle value) {
+          self.*member = convert_field<T>(value, info);
+        },
+        info.description);
+  });
+  cls.def(py::init([](const py::kwargs &kwargs) {
+    Params params;
+    py::object self = py::cast(params);
+    for (const auto &item : kwargs) {
+      const std::string key = py::cast<std::string>(item.first);
+      if (!py::hasattr(self, key.c_str())) {
+        throw py::value_error("unknown parameter '" + key + "'");
+      }
+      self.attr(key.c_str()) = item.second;
+    }
+    return self.cast<Params>();
+  }));
+  cls.def("to_dict", [](const py::object &self) {
+    py::dict result;
+    Params::for_each_field([&](auto, const ParamInfo &info) {
+      result[info.name] = self.attr(info.name);
+    });
+    return result;
+  });
+  cls.def_static("fields", []() {
+    py::list table;
+    const py::object defaults = py::cast(Params());
+    Params::for_each_field([&](auto, const ParamInfo &info) {
+      py::dict row;
+      row["name"] = info.name;
+      row["symbol"] = info.symbol;
+      row["unit"] = info.unit;
+      row["min"] = info.min;
+      row["max"] = info.max;
+      row["default"] = defaults.attr(info.name);
+      row["description"] = info.description;
+      row["choices"] = info.choices;
+      table.append(row);
+    });
+    return table;
+  });
+  return cls;
+}
+
+}  // namespace hairdyn::bindings
