@@ -94,7 +94,7 @@ mat4 as_matrix(const py::handle obj, const char *name)
   if (!array || array.ndim() != 2 || array.shape(0) != 4 || array.shape(1) != 4) {
     fail(std::string(name) + " must be a 4x4 matrix");
   }
-  glm::dmat4 m;
+  glm::dmat4 m(0.0);
   for (int row = 0; row < 4; row++) {
     for (int col = 0; col < 4; col++) {
       m[col][row] = array.at(row, col);
