@@ -1,0 +1,341 @@
+"""Blender <-> numpy: read hair and meshes, write simulated positions back.
+
+Everything goes through foreach_get / foreach_set on numpy arrays: no per-point Python loop.
+Arrays handed to the native module are C-contiguous (N, 3) float32 / int32, so they cross
+the boundary without copies.
+"""
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+
+from .errors import HairdynError
+
+# Attribute Blender's hair tools store the root's surface UV in (Curves, curve domain).
+SURFACE_UV_ATTRIBUTE = "surface_uv_coordinate"
+
+
+@dataclass
+class Groom:
+    """Strands as Blender stores curves: offsets into one positions array (world space)."""
+
+    positions_wo: np.ndarray  # (N, 3) float32
+    curve_offsets: np.ndarray  # (C + 1,) int32
+    surface: object  # bpy.types.Object the roots sit on, or None
+    root_uvs: object  # (C, 2) float32 surface UVs of the roots, or None
+
+    @property
+    def curves_num(self):
+        return len(self.curve_offsets) - 1
+
+    @property
+    def points_num(self):
+        return len(self.positions_wo)
+
+
+@dataclass
+class MeshData:
+    """An evaluated mesh in its object space, and where the object is (rigid motion is the
+    matrix, not new geometry)."""
+
+    name: str
+    vertices: np.ndarray  # (V, 3) float32, object space
+    normals: np.ndarray  # (V, 3) float32, object space
+    triangles: np.ndarray  # (T, 3) int32
+    matrix_world: np.ndarray  # (4, 4) float64, row-major as Blender
+
+    def vertices_wo(self):
+        return to_world(self.matrix_world, self.vertices)
+
+    def normals_wo(self):
+        """World-space unit normals (inverse-transpose, so non-uniform scale is right)."""
+        normal_matrix = np.linalg.inv(self.matrix_world[:3, :3]).T
+        normals = self.normals.astype(np.float64) @ normal_matrix.T
+        lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+        return (normals / np.maximum(lengths, 1e-30)).astype(np.float32)
+
+
+def matrix_array(matrix):
+    """A Blender Matrix as a (4, 4) float64 numpy array (row-major, as printed)."""
+    return np.array(matrix, dtype=np.float64)
+
+
+def to_world(matrix_world, points):
+    """(N, 3) object-space float32 points to world space (float64 product, float32 result)."""
+    m = np.asarray(matrix_world, dtype=np.float64)
+    return np.ascontiguousarray((points @ m[:3, :3].T + m[:3, 3]).astype(np.float32))
+
+
+def hair_particle_system(obj):
+    """The mesh's hair particle system (the active one if it is hair), or None."""
+    if obj is None or obj.type != 'MESH':
+        return None
+    systems = obj.particle_systems
+    active = systems.active
+    if active is not None and active.settings.type == 'HAIR':
+        return active
+    return next((psys for psys in systems if psys.settings.type == 'HAIR'), None)
+
+
+def is_hair_object(obj):
+    """Curves objects, and meshes that carry a hair particle system."""
+    return obj is not None and (obj.type == 'CURVES' or hair_particle_system(obj) is not None)
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading hair
+
+
+def _curves_arrays(curves):
+    """(positions (N, 3) float32 object space, curve_offsets (C + 1,) int32) of a Curves ID."""
+    positions = np.empty((len(curves.points), 3), dtype=np.float32)
+    curve_offsets = np.zeros(len(curves.curves) + 1, dtype=np.int32)
+    if len(curves.curves):  # an empty Curves ID stores no offsets at all, not [0]
+        curves.position_data.foreach_get("vector", positions.ravel())
+        curves.curve_offset_data.foreach_get("value", curve_offsets)
+    return positions, curve_offsets
+
+
+def read_curves(obj, depsgraph):
+    """A Curves hair object, evaluated, in world space."""
+    evaluated = obj.evaluated_get(depsgraph)
+    curves = evaluated.data
+    if not isinstance(curves, bpy.types.Curves):
+        raise HairdynError(f"'{obj.name}' does not evaluate to hair curves")
+    positions, curve_offsets = _curves_arrays(curves)
+    if len(curve_offsets) < 2:
+        raise HairdynError(f"'{obj.name}' has no hair strands")
+    root_uvs = None
+    # UVs as the artist authored them (the original ID: evaluated attributes may be
+    # read-only views that Blender refuses to hand out).
+    attribute = obj.data.attributes.get(SURFACE_UV_ATTRIBUTE)
+    if (attribute is not None and attribute.domain == 'CURVE' and attribute.data_type == 'FLOAT2'
+            and len(attribute.data) == len(curve_offsets) - 1):
+        root_uvs = np.empty((len(curve_offsets) - 1, 2), dtype=np.float32)
+        attribute.data.foreach_get("vector", root_uvs.ravel())
+    return Groom(
+        positions_wo=to_world(matrix_array(evaluated.matrix_world), positions),
+        curve_offsets=curve_offsets,
+        surface=obj.data.surface,
+        root_uvs=root_uvs,
+    )
+
+
+def read_particle_hair(obj, depsgraph):
+    """Legacy particle hair: the evaluated guide strands (parents), in world space.
+
+    Blender's evaluated hair is the particle system's path cache, the strands the viewport
+    draws (the same data ParticleSystem.co_hair returns). Blender's own converter
+    (curves.convert_from_particle_system) copies it into a temporary Curves object in C, so
+    no Python loop touches a point; parents come first when the settings show them, which
+    this switches on for the moment of the conversion.
+    """
+    psys = hair_particle_system(obj)
+    if psys is None:
+        raise HairdynError(f"'{obj.name}' has no hair particle system")
+    settings = psys.settings
+    parents_num = len(obj.evaluated_get(depsgraph).particle_systems[psys.name].particles)
+    if parents_num == 0:
+        raise HairdynError(f"The hair particle system of '{obj.name}' has no strands")
+
+    showed_parents = settings.use_parent_particles
+    active_index = obj.particle_systems.active_index
+    before = set(bpy.data.objects)
+    try:
+        settings.use_parent_particles = True
+        obj.particle_systems.active_index = list(obj.particle_systems).index(psys)
+        depsgraph.update()
+        with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj],
+                                       selected_editable_objects=[obj]):
+            bpy.ops.curves.convert_from_particle_system()
+        created = [o for o in bpy.data.objects if o not in before]
+        if len(created) != 1 or created[0].type != 'CURVES':
+            raise HairdynError(f"Blender could not convert the hair of '{obj.name}'")
+        converted = created[0]
+        positions, curve_offsets = _curves_arrays(converted.data)
+        matrix_world = matrix_array(converted.matrix_world)
+    finally:
+        for leftover in [o for o in bpy.data.objects if o not in before]:
+            data = leftover.data
+            bpy.data.objects.remove(leftover)
+            if data is not None and data.users == 0:
+                bpy.data.hair_curves.remove(data)
+        settings.use_parent_particles = showed_parents
+        obj.particle_systems.active_index = active_index
+        depsgraph.update()
+
+    curve_offsets = np.ascontiguousarray(curve_offsets[:parents_num + 1])
+    positions = positions[:curve_offsets[-1]]
+    return Groom(
+        positions_wo=to_world(matrix_world, positions),
+        curve_offsets=curve_offsets,
+        surface=obj,
+        root_uvs=None,
+    )
+
+
+def read_groom(obj, depsgraph):
+    """The strands of any hair object, world space."""
+    if obj is None:
+        raise HairdynError("No hair object given")
+    if obj.type == 'CURVES':
+        return read_curves(obj, depsgraph)
+    if hair_particle_system(obj) is not None:
+        return read_particle_hair(obj, depsgraph)
+    raise HairdynError(f"'{obj.name}' is not hair: use a Curves object or a mesh with a hair "
+                       "particle system")
+
+
+# ---------------------------------------------------------------------------------------------
+# Reading meshes
+
+
+def read_mesh(obj, depsgraph):
+    """An evaluated mesh object's triangles and normals in object space, plus its matrix."""
+    if obj is None or obj.type != 'MESH':
+        raise HairdynError(f"'{getattr(obj, 'name', obj)}' is not a mesh object")
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        vertices = np.empty((len(mesh.vertices), 3), dtype=np.float32)
+        normals = np.empty_like(vertices)
+        mesh.vertices.foreach_get("co", vertices.ravel())
+        mesh.vertices.foreach_get("normal", normals.ravel())
+        mesh.calc_loop_triangles()
+        triangles = np.empty((len(mesh.loop_triangles), 3), dtype=np.int32)
+        mesh.loop_triangles.foreach_get("vertices", triangles.ravel())
+    finally:
+        evaluated.to_mesh_clear()
+    return MeshData(obj.name, vertices, normals, triangles,
+                    matrix_array(evaluated.matrix_world))
+
+
+def object_matrix(obj, depsgraph):
+    """The evaluated object-to-world matrix, (4, 4) float64."""
+    return matrix_array(obj.evaluated_get(depsgraph).matrix_world)
+
+
+# ---------------------------------------------------------------------------------------------
+# Writing results
+
+
+def _link_like(new_obj, like):
+    collections = like.users_collection if like is not None else ()
+    target = collections[0] if collections else bpy.context.scene.collection
+    target.objects.link(new_obj)
+
+
+def _new_curves_data(name, sizes):
+    """A Curves ID with the given points per curve, on any supported Blender.
+
+    Newer Blender resizes Curves directly (Curves.add_curves). Older Blender has no such API,
+    so the topology is made as a legacy poly curve and converted by Blender's own operator.
+    """
+    if "add_curves" in bpy.types.Curves.bl_rna.functions:
+        curves = bpy.data.hair_curves.new(name)
+        curves.add_curves([int(size) for size in sizes])
+        return curves
+    legacy = bpy.data.curves.new(name, 'CURVE')
+    for size in sizes:  # one call per strand: Blender 3.x offers no bulk curve creation
+        legacy.splines.new('POLY').points.add(int(size) - 1)
+    temp = bpy.data.objects.new(name, legacy)
+    bpy.context.scene.collection.objects.link(temp)
+    view_layer = bpy.context.view_layer
+    previous_active = view_layer.objects.active
+    previous_selection = [o for o in view_layer.objects if o.select_get()]
+    try:
+        for o in previous_selection:
+            o.select_set(False)
+        temp.select_set(True)
+        view_layer.objects.active = temp
+        bpy.ops.object.convert(target='CURVES')
+        curves = temp.data
+        if not isinstance(curves, bpy.types.Curves):
+            raise HairdynError("Blender could not create the output hair curves")
+        curves.name = name
+        if "radius" in curves.attributes:  # legacy points carry radius 1 m; hair must not
+            curves.attributes.remove(curves.attributes["radius"])
+    finally:
+        bpy.data.objects.remove(temp)
+        if legacy.users == 0:
+            bpy.data.curves.remove(legacy)
+        for o in previous_selection:
+            o.select_set(True)
+        view_layer.objects.active = previous_active
+    return curves
+
+
+def _topology_matches(curves, curve_offsets):
+    if len(curves.curves) + 1 != len(curve_offsets):
+        return False
+    _, offsets = _curves_arrays(curves)
+    return np.array_equal(offsets, curve_offsets)
+
+
+def ensure_curves_output(obj, name, curve_offsets, like=None):
+    """`obj` if it is a Curves object with this topology, otherwise a new one named `name`.
+
+    The new object sits at the world origin (positions are written in world space), in the
+    collection of `like`, with `like`'s materials and strand radius.
+    """
+    if obj is not None and obj.type == 'CURVES' and _topology_matches(obj.data, curve_offsets):
+        return obj
+    curves = _new_curves_data(name, np.diff(curve_offsets))
+    if like is not None and like.type == 'CURVES':
+        for material in like.data.materials:
+            curves.materials.append(material)
+        radius = like.data.attributes.get("radius")
+        if radius is not None and radius.domain == 'POINT' and len(radius.data) == len(curves.points):
+            values = np.empty(len(radius.data), dtype=np.float32)
+            radius.data.foreach_get("value", values)
+            curves.attributes.new("radius", 'FLOAT', 'POINT').data.foreach_set("value", values)
+    new_obj = bpy.data.objects.new(name, curves)
+    _link_like(new_obj, like)
+    return new_obj
+
+
+def write_curves(obj, positions_wo):
+    """Positions (N, 3) float32 into a Curves object of the same point count."""
+    curves = obj.data
+    if len(curves.points) != len(positions_wo):
+        raise HairdynError(f"'{obj.name}' has {len(curves.points)} points, the simulation "
+                           f"{len(positions_wo)}")
+    curves.position_data.foreach_set("vector", np.ascontiguousarray(positions_wo).ravel())
+    curves.update_tag()
+
+
+def ensure_points_output(obj, name, like=None):
+    """`obj` if it is a mesh object, otherwise a new empty mesh object named `name`."""
+    if obj is not None and obj.type == 'MESH':
+        return obj
+    new_obj = bpy.data.objects.new(name, bpy.data.meshes.new(name))
+    _link_like(new_obj, like)
+    return new_obj
+
+
+_ATTRIBUTE_TYPES = {1: ("FLOAT", "value"), 3: ("FLOAT_VECTOR", "vector")}
+
+
+def write_points(obj, positions_wo, attributes=None):
+    """Positions as loose vertices of a mesh, plus named point attributes.
+
+    `attributes` maps a name to an (N,) or (N, 3) float32 array; geometry nodes and Cycles
+    read them by name (Attribute node).
+    """
+    mesh = obj.data
+    count = len(positions_wo)
+    if len(mesh.vertices) != count or len(mesh.edges) or len(mesh.polygons):
+        mesh.clear_geometry()
+        mesh.vertices.add(count)
+    mesh.vertices.foreach_set("co", np.ascontiguousarray(positions_wo, dtype=np.float32).ravel())
+    for name, values in (attributes or {}).items():
+        values = np.ascontiguousarray(values, dtype=np.float32)
+        width = 1 if values.ndim == 1 else values.shape[1]
+        data_type, field = _ATTRIBUTE_TYPES[width]
+        attribute = mesh.attributes.get(name)
+        if attribute is None or attribute.data_type != data_type or attribute.domain != 'POINT':
+            if attribute is not None:
+                mesh.attributes.remove(attribute)
+            attribute = mesh.attributes.new(name, data_type, 'POINT')
+        attribute.data.foreach_set(field, values.ravel())
+    mesh.update()

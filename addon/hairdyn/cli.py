@@ -1,0 +1,166 @@
+"""hairdyn's headless entry point.
+
+In Blender:        blender -b scene.blend --python addon/hairdyn/cli.py -- run --object Hair
+                       --frames 1 48 --set method=follow --report out.json
+With the bpy module: python addon/hairdyn/cli.py --blend scene.blend run --object Hair ...
+
+`--set name=value` sets any property of the object's hairdyn settings by name (enum values
+case-insensitive). Exit codes: 0 success, 1 the simulation failed (message on stderr, the
+report still written when possible), 2 bad command line (unknown object, parameter or value).
+"""
+import argparse
+import json
+import sys
+from pathlib import Path
+
+USAGE_ERROR = 2
+RUN_ERROR = 1
+
+
+class UsageError(Exception):
+    pass
+
+
+def _arguments(argv):
+    parser = argparse.ArgumentParser(
+        prog="hairdyn", description="Run hairdyn on a hair object of a .blend, headless.")
+    parser.add_argument("--blend", help="open this .blend first (bpy module; the blender "
+                                        "binary opens the file given before --python)")
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("run", help="simulate a frame range into the output objects")
+    run.add_argument("--object", required=True, help="name of the hair object")
+    run.add_argument("--frames", nargs=2, type=int, metavar=("START", "END"),
+                     help="frame range (default: the object's hairdyn frame range)")
+    run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                     help="set a hairdyn parameter by its property name (repeatable)")
+    run.add_argument("--report", help="write the JSON report here (default: stdout)")
+    run.add_argument("--save", help="save the .blend with the results here")
+    return parser.parse_args(argv)
+
+
+def _parse_value(prop, text):
+    """Text -> a value for the RNA property `prop`, or UsageError."""
+    kind = prop.type
+    if kind == 'BOOLEAN':
+        lowered = text.strip().lower()
+        if lowered in ("1", "true", "yes", "on"):
+            return True
+        if lowered in ("0", "false", "no", "off"):
+            return False
+        raise UsageError(f"{prop.identifier} must be true or false, not '{text}'")
+    if kind in ('INT', 'FLOAT'):
+        try:
+            value = int(text) if kind == 'INT' else float(text)
+        except ValueError:
+            raise UsageError(f"{prop.identifier} must be {'an integer' if kind == 'INT' else 'a number'}, "
+                             f"not '{text}'") from None
+        if not (prop.hard_min <= value <= prop.hard_max) or value != value:
+            raise UsageError(f"{prop.identifier} must be between {prop.hard_min} and "
+                             f"{prop.hard_max}, not {text}")
+        return value
+    if kind == 'ENUM':
+        identifiers = [item.identifier for item in prop.enum_items]
+        for identifier in identifiers:
+            if identifier.lower() == text.strip().lower():
+                return identifier
+        raise UsageError(f"{prop.identifier} must be one of {', '.join(i.lower() for i in identifiers)}, "
+                         f"not '{text}'")
+    if kind == 'POINTER':
+        import bpy
+
+        obj = bpy.data.objects.get(text)
+        if obj is None:
+            raise UsageError(f"{prop.identifier}: there is no object named '{text}'")
+        return obj
+    if kind == 'STRING':
+        return text
+    raise UsageError(f"{prop.identifier} cannot be set from the command line")
+
+
+def apply_settings(settings, assignments):
+    """Apply NAME=VALUE strings to a hairdyn settings PropertyGroup."""
+    properties = {p.identifier: p for p in settings.bl_rna.properties
+                  if p.identifier not in ("rna_type", "name")}
+    for assignment in assignments:
+        name, sep, text = assignment.partition("=")
+        name = name.strip()
+        if not sep:
+            raise UsageError(f"--set needs NAME=VALUE, not '{assignment}'")
+        if name not in properties:
+            raise UsageError(f"unknown parameter '{name}'; known: {', '.join(sorted(properties))}")
+        value = _parse_value(properties[name], text)
+        try:
+            setattr(settings, name, value)
+        except (TypeError, ValueError) as error:
+            raise UsageError(f"{name}: {error}") from None
+
+
+def _ensure_addon():
+    """Import and register the hairdyn package that holds this file."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+    import bpy
+    import hairdyn
+
+    if not hasattr(bpy.types.Object, "hairdyn"):
+        hairdyn.register()
+    return hairdyn
+
+
+def main(argv):
+    try:
+        args = _arguments(argv)
+    except SystemExit as exit_:
+        return USAGE_ERROR if exit_.code else 0
+    import bpy
+
+    hairdyn = _ensure_addon()
+    from hairdyn import simulation
+    from hairdyn.errors import HairdynError
+
+    try:
+        if args.blend:
+            if not Path(args.blend).is_file():
+                raise UsageError(f"there is no .blend file at '{args.blend}'")
+            bpy.ops.wm.open_mainfile(filepath=str(Path(args.blend).resolve()))
+        obj = bpy.data.objects.get(args.object)
+        if obj is None:
+            hair = [o.name for o in bpy.data.objects if hairdyn.bridge.is_hair_object(o)]
+            raise UsageError(f"there is no object named '{args.object}'; hair objects: "
+                             f"{', '.join(hair) or 'none'}")
+        apply_settings(obj.hairdyn, args.set)
+        start, end = args.frames or (obj.hairdyn.frame_start, obj.hairdyn.frame_end)
+    except UsageError as error:
+        print(f"hairdyn: error: {error}", file=sys.stderr)
+        return USAGE_ERROR
+
+    def progress(frame, ms):
+        print(f"hairdyn: frame {frame} ({ms:.2f} ms)", flush=True)
+
+    try:
+        report = simulation.run(bpy.context, obj, start, end, on_frame=progress)
+    except HairdynError as error:
+        print(f"hairdyn: error: {error}", file=sys.stderr)
+        return RUN_ERROR
+    text = json.dumps(report, indent=2)
+    if args.report:
+        Path(args.report).write_text(text + "\n")
+        print(f"hairdyn: report written to {args.report}")
+    else:
+        print(text)
+    if args.save:
+        bpy.ops.wm.save_as_mainfile(filepath=str(Path(args.save).resolve()), copy=True)
+    if report["nan_frames"]:
+        print(f"hairdyn: error: {report['nan_frames']} frame(s) were not finite", file=sys.stderr)
+        return RUN_ERROR
+    return 0
+
+
+def _argv():
+    """Arguments after '--' inside Blender, else the script's own arguments."""
+    return sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+
+
+if __name__ == "__main__":
+    code = main(_argv())
+    if code:
+        sys.exit(code)

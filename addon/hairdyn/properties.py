@@ -1,0 +1,41 @@
+"""Settings an artist edits, one PropertyGroup per object (Object.hairdyn).
+
+Solver parameter groups mirror the native parameter structs field for field; a test checks
+them against hairdyn._native's `fields()` tables so the panel and the solver cannot drift.
+"""
+import bpy
+from bpy.props import EnumProperty, IntProperty, PointerProperty
+
+METHODS = (
+    ("FOLLOW", "Follow Head",
+     "Kinematic baseline: every strand keeps its rest shape in the head's frame and follows "
+     "the head rigidly"),
+)
+
+
+def _is_mesh(_self, obj):
+    return obj.type == 'MESH'
+
+
+class HairdynSettings(bpy.types.PropertyGroup):
+    method: EnumProperty(
+        name="Method", items=METHODS, default="FOLLOW",
+        description="How the hair moves")
+    head: PointerProperty(
+        name="Head", type=bpy.types.Object, poll=_is_mesh,
+        description="Mesh the hair roots are attached to. Empty: the Curves object's surface, "
+                    "or the mesh that emits the particle hair")
+    frame_start: IntProperty(
+        name="Start", default=1, min=-1048574, max=1048574,
+        description="First frame of the simulation: the groom's rest shape is read here")
+    frame_end: IntProperty(
+        name="End", default=250, min=-1048574, max=1048574,
+        description="Last frame of the simulation")
+    output_curves: PointerProperty(
+        name="Output Curves", type=bpy.types.Object,
+        description="Curves object that receives the simulated strands every frame "
+                    "(created when empty)")
+    output_points: PointerProperty(
+        name="Output Points", type=bpy.types.Object,
+        description="Mesh of loose vertices that receives the simulated points and their "
+                    "attributes every frame (created when empty)")

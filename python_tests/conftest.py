@@ -1,0 +1,59 @@
+"""pytest inside Blender: the `blender` binary (run_in_blender.py) and the `bpy` module.
+
+Every test that needs a scene opens a fixture from blend_fixtures/ fresh.
+"""
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+FIXTURES = ROOT / "blend_fixtures"
+ARTIFACTS = Path(os.environ.get("HAIRDYN_ARTIFACTS", ROOT / "out" / "test_artifacts"))
+sys.path.insert(0, str(ROOT / "addon"))
+
+import bpy  # noqa: E402
+
+import hairdyn  # noqa: E402
+
+
+def host_name():
+    """'blender' for the blender binary, 'bpy' for the bpy module."""
+    return "blender" if bpy.app.binary_path else "bpy"
+
+
+def pytest_report_header(config):
+    return f"hairdyn host: {host_name()} (Blender {bpy.app.version_string})"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def addon():
+    if not hasattr(bpy.types.Object, "hairdyn"):
+        hairdyn.register()
+    yield hairdyn
+
+
+@pytest.fixture
+def open_fixture():
+    """open_fixture("head_curves.blend") loads a fixture as the current file."""
+
+    def load(name):
+        path = FIXTURES / name
+        assert path.is_file(), f"missing fixture {path}: run blend_fixtures/make_fixtures.py"
+        bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
+        return bpy.context.scene
+
+    return load
+
+
+@pytest.fixture
+def empty_scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    return bpy.context.scene
+
+
+@pytest.fixture
+def artifacts():
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    return ARTIFACTS

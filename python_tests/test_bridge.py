@@ -1,0 +1,242 @@
+"""Blender <-> numpy <-> C++: reading hair and meshes, writing results back."""
+import math
+
+import bpy
+import numpy as np
+import pytest
+from mathutils import Vector
+
+from hairdyn import bridge, native, simulation
+from hairdyn.errors import HairdynError
+
+
+def depsgraph():
+    return bpy.context.evaluated_depsgraph_get()
+
+
+def reference_curves_world(obj):
+    """Blender's own evaluated points, one by one through mathutils (slow, independent)."""
+    evaluated = obj.evaluated_get(depsgraph())
+    matrix = evaluated.matrix_world
+    points = [matrix @ Vector(p.position) for p in evaluated.data.points]
+    offsets = [c.first_point_index for c in evaluated.data.curves] + [len(points)]
+    return np.array(points, dtype=np.float64), np.array(offsets)
+
+
+def test_read_curves_matches_blender(open_fixture):
+    open_fixture("head_curves.blend")
+    hair = bpy.data.objects["Hair"]
+    groom = bridge.read_curves(hair, depsgraph())
+    expected_positions, expected_offsets = reference_curves_world(hair)
+    assert groom.positions_wo.dtype == np.float32 and groom.positions_wo.flags.c_contiguous
+    assert groom.curve_offsets.dtype == np.int32
+    assert np.array_equal(groom.curve_offsets, expected_offsets)
+    assert groom.curves_num == 300 and groom.points_num == 2700
+    assert np.abs(groom.positions_wo - expected_positions).max() < 1e-6
+    assert groom.surface == bpy.data.objects["Body"]
+    assert groom.root_uvs.shape == (300, 2)
+    assert np.all((groom.root_uvs >= 0.0) & (groom.root_uvs <= 1.0))
+    assert len(np.unique(groom.root_uvs, axis=0)) > 250  # real UVs, not a constant
+
+
+def test_read_curves_is_world_space(open_fixture):
+    open_fixture("head_shake.blend")
+    bpy.context.scene.frame_set(12)  # the head is turned 35 degrees and moved
+    hair = bpy.data.objects["Hair"]
+    groom = bridge.read_curves(hair, depsgraph())
+    expected_positions, _ = reference_curves_world(hair)
+    assert np.abs(groom.positions_wo - expected_positions).max() < 1e-6
+    local = np.array([p.position for p in hair.data.points])
+    assert np.abs(groom.positions_wo - local).max() > 0.01  # the transform was applied
+
+
+def test_particle_hair_equals_evaluated_keys(open_fixture):
+    open_fixture("head_particles.blend")
+    body = bpy.data.objects["Body"]
+    psys_settings = body.particle_systems[0].settings
+    assert not psys_settings.use_parent_particles
+    groom = bridge.read_particle_hair(body, depsgraph())
+
+    evaluated = body.evaluated_get(depsgraph())
+    psys = evaluated.particle_systems[0]
+    strands_num = len(psys.particles)
+    steps = 2 ** psys.settings.display_step + 1
+    expected = np.array([[tuple(psys.co_hair(object=evaluated, particle_no=i, step=k))
+                          for k in range(steps)] for i in range(strands_num)])
+    assert groom.curves_num == strands_num == 300
+    assert np.array_equal(np.diff(groom.curve_offsets), np.full(strands_num, steps))
+    assert np.abs(groom.positions_wo.reshape(strands_num, steps, 3) - expected).max() < 1e-5
+    assert groom.surface == body
+    # The user's settings are as they were, and no temporary object is left behind.
+    assert not psys_settings.use_parent_particles
+    assert sorted(o.name for o in bpy.data.objects) == ["Body", "Camera", "Sun"]
+    assert len(bpy.data.hair_curves) == 0
+
+
+def test_read_collider_mesh(open_fixture):
+    open_fixture("head_shake.blend")
+    body = bpy.data.objects["Body"]
+    rest = bridge.read_mesh(body, depsgraph())
+    mesh = body.evaluated_get(depsgraph()).data
+    mesh.calc_loop_triangles()
+    assert rest.triangles.shape == (len(mesh.loop_triangles), 3)
+    assert rest.vertices.shape == (len(mesh.vertices), 3)
+    assert rest.triangles.dtype == np.int32 and rest.vertices.dtype == np.float32
+    for index in (0, 100, len(mesh.vertices) - 1):
+        expected = body.matrix_world @ mesh.vertices[index].co
+        assert np.allclose(rest.vertices_wo()[index], expected, atol=1e-6)
+        expected_normal = (body.matrix_world.to_3x3().inverted().transposed()
+                           @ mesh.vertices[index].normal).normalized()
+        assert np.allclose(rest.normals_wo()[index], expected_normal, atol=1e-5)
+    # Rigid motion is a transform, not new geometry.
+    bpy.context.scene.frame_set(30)
+    moved = bridge.read_mesh(body, depsgraph())
+    assert np.array_equal(moved.vertices, rest.vertices)
+    assert not np.allclose(moved.matrix_world, rest.matrix_world)
+    assert np.allclose(moved.matrix_world, np.array(body.matrix_world))
+    native.load().ColliderMesh(rest.vertices, rest.triangles)  # accepted as it is
+
+
+def test_mesh_without_faces_is_a_clear_error(empty_scene):
+    mesh = bpy.data.meshes.new("Loose")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1)], [])
+    obj = bpy.data.objects.new("Loose", mesh)
+    empty_scene.collection.objects.link(obj)
+    data = bridge.read_mesh(obj, depsgraph())
+    with pytest.raises(ValueError, match="Invalid collider mesh: the mesh has no faces."):
+        native.load().ColliderMesh(data.vertices, data.triangles)
+
+
+def test_curves_round_trip_bit_exact(open_fixture):
+    open_fixture("head_curves.blend")
+    hair = bpy.data.objects["Hair"]
+    groom = bridge.read_curves(hair, depsgraph())
+    output = bridge.ensure_curves_output(None, "Out", groom.curve_offsets, like=hair)
+    rng = np.random.default_rng(1)
+    positions = rng.normal(size=groom.positions_wo.shape).astype(np.float32)
+    bridge.write_curves(output, positions)
+    back = np.empty_like(positions)
+    output.data.position_data.foreach_get("vector", back.ravel())
+    assert back.tobytes() == positions.tobytes()
+    assert bridge.read_curves(output, depsgraph()).positions_wo.tobytes() == positions.tobytes()
+    # The same object is reused while the topology matches.
+    assert bridge.ensure_curves_output(output, "Out", groom.curve_offsets) == output
+    assert output.data.materials[0] == hair.data.materials[0]
+    assert "radius" in output.data.attributes
+
+
+def test_write_back_is_visible_in_the_depsgraph(open_fixture):
+    open_fixture("head_curves.blend")
+    hair = bpy.data.objects["Hair"]
+    groom = bridge.read_curves(hair, depsgraph())
+    curves_out = bridge.ensure_curves_output(None, "Out", groom.curve_offsets)
+    points_out = bridge.ensure_points_output(None, "OutPoints")
+    shifted = groom.positions_wo + np.float32(0.5)
+    direction = simulation.point_tangents(groom.curve_offsets, shifted)
+    density = np.linspace(0.0, 1.0, len(shifted), dtype=np.float32)
+    bridge.write_curves(curves_out, shifted)
+    bridge.write_points(points_out, shifted, {"direction": direction, "density": density})
+
+    graph = depsgraph()
+    evaluated_curves = curves_out.evaluated_get(graph).data
+    seen = np.empty_like(shifted)
+    evaluated_curves.position_data.foreach_get("vector", seen.ravel())
+    assert np.array_equal(seen, shifted)
+    evaluated_mesh = points_out.evaluated_get(graph).data
+    assert len(evaluated_mesh.vertices) == len(shifted) and len(evaluated_mesh.edges) == 0
+    seen_points = np.empty_like(shifted)
+    evaluated_mesh.vertices.foreach_get("co", seen_points.ravel())
+    assert np.array_equal(seen_points, shifted)
+    seen_density = np.empty_like(density)
+    evaluated_mesh.attributes["density"].data.foreach_get("value", seen_density)
+    assert np.array_equal(seen_density, density)
+    seen_direction = np.empty_like(direction)
+    evaluated_mesh.attributes["direction"].data.foreach_get("vector", seen_direction.ravel())
+    assert np.array_equal(seen_direction, direction)
+    assert np.allclose(np.linalg.norm(direction, axis=1), 1.0, atol=1e-6)
+
+
+def test_arrays_cross_without_copies(open_fixture):
+    open_fixture("head_curves.blend")
+    hair = bpy.data.objects["Hair"]
+    groom = bridge.read_curves(hair, depsgraph())
+    _native = native.load()
+    assert _native.buffer_address(groom.positions_wo) == groom.positions_wo.ctypes.data
+    solver = _native.FollowSolver(groom.curve_offsets, groom.positions_wo, np.eye(4))
+    view = solver.positions
+    address = view.ctypes.data
+    assert not view.flags.writeable and view.base is solver
+    solver.step(np.diag([1.0, 1.0, 2.0, 1.0]))
+    assert solver.positions.ctypes.data == address  # the same buffer, updated in place
+    assert np.allclose(view[:, 2], groom.positions_wo[:, 2] * 2.0)
+
+
+@pytest.mark.parametrize("dtype, shape, message", [
+    (np.float64, (4, 3), "dtype float32"),
+    (np.float32, (4, 2), r"shape \(N, 3\)"),
+    (np.float32, (12,), r"shape \(N, 3\)"),
+])
+def test_bindings_reject_wrong_arrays(dtype, shape, message):
+    _native = native.load()
+    with pytest.raises(ValueError, match=message):
+        _native.FollowSolver(np.array([0, 4], np.int32), np.zeros(shape, dtype), np.eye(4))
+
+
+def test_bindings_reject_non_contiguous_and_lists():
+    _native = native.load()
+    strided = np.zeros((8, 3), np.float32)[::2]
+    with pytest.raises(ValueError, match="C-contiguous"):
+        _native.buffer_address(strided)
+    with pytest.raises(ValueError, match="must be a numpy array, not list"):
+        _native.buffer_address([[0.0, 0.0, 0.0]])
+
+
+def make_hair(scene, sizes, name="BadHair"):
+    curves = bridge._new_curves_data(name, sizes)
+    obj = bpy.data.objects.new(name, curves)
+    scene.collection.objects.link(obj)
+    return obj
+
+
+def test_empty_curves_object_is_a_clear_error(empty_scene):
+    obj = bpy.data.objects.new("Empty", bpy.data.hair_curves.new("Empty"))
+    empty_scene.collection.objects.link(obj)
+    with pytest.raises(HairdynError, match="'Empty' has no hair strands"):
+        bridge.read_groom(obj, depsgraph())
+
+
+def test_single_point_strand_is_a_clear_error(empty_scene):
+    head = bpy.data.objects.new("Head", bpy.data.meshes.new("Head"))
+    empty_scene.collection.objects.link(head)
+    obj = make_hair(empty_scene, [3, 1, 2])
+    positions = np.arange(18, dtype=np.float32).reshape(6, 3) * np.float32(0.01)
+    obj.data.position_data.foreach_set("vector", positions.ravel())
+    obj.hairdyn.head = head
+    with pytest.raises(HairdynError, match="strand 1 has 1 point.*at least 2"):
+        simulation.Simulation(obj, depsgraph())
+
+
+def test_nan_positions_are_a_clear_error(empty_scene):
+    head = bpy.data.objects.new("Head", bpy.data.meshes.new("Head"))
+    empty_scene.collection.objects.link(head)
+    obj = make_hair(empty_scene, [3, 3])
+    positions = np.arange(18, dtype=np.float32).reshape(6, 3) * np.float32(0.01)
+    positions[4, 1] = math.nan
+    obj.data.position_data.foreach_set("vector", positions.ravel())
+    obj.hairdyn.head = head
+    with pytest.raises(HairdynError, match="not a finite number"):
+        simulation.Simulation(obj, depsgraph())
+
+
+def test_hair_without_head_is_a_clear_error(empty_scene):
+    obj = make_hair(empty_scene, [3])
+    positions = np.arange(9, dtype=np.float32).reshape(3, 3)
+    obj.data.position_data.foreach_set("vector", positions.ravel())
+    with pytest.raises(HairdynError, match="has no head"):
+        simulation.Simulation(obj, depsgraph())
+
+
+def test_not_hair_is_a_clear_error(open_fixture):
+    open_fixture("head_curves.blend")
+    with pytest.raises(HairdynError, match="'Camera' is not hair"):
+        bridge.read_groom(bpy.data.objects["Camera"], depsgraph())
