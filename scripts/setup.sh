@@ -37,6 +37,11 @@ if [ ! -x "$VENV/bin/python" ] || ! cmp -s "$REQUIREMENTS" "$STAMP"; then
   echo "setup: creating $VENV with $(tr '\n' ' ' < "$REQUIREMENTS")"
   rm -rf "$VENV"
   /usr/bin/python3.11 -m venv "$VENV"
-  "$VENV/bin/python" -m pip install --quiet --disable-pip-version-check -r "$REQUIREMENTS"
+  if ! "$VENV/bin/python" -m pip install --disable-pip-version-check -r "$REQUIREMENTS" \
+      >"$VENV/pip.log" 2>&1; then
+    cat "$VENV/pip.log"
+    echo "setup: pip could not install $REQUIREMENTS (log above)" >&2
+    exit 1
+  fi
   cp "$REQUIREMENTS" "$STAMP"
 fi

@@ -1,0 +1,30 @@
+# hairdyn: `make demo` runs the main job, `make test` runs every test. Both set up the
+# machine first (Debian packages, the bpy venv) and build the native module.
+CMAKE := /usr/bin/cmake
+BUILD := build
+JOBS ?= 2
+
+.PHONY: setup build test demo bench fixtures clean
+
+setup:
+	@scripts/setup.sh
+
+build: setup
+	@$(CMAKE) -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE=/usr/bin/python3.11 >/dev/null
+	@$(CMAKE) --build $(BUILD) -j$(JOBS)
+
+test: build
+	@scripts/test.sh
+
+demo: build
+	blender -b blend_fixtures/head_shake.blend --python-exit-code 1 --python scripts/demo.py -- out/demo
+
+bench: build
+	$(BUILD)/hairdyn_bench
+
+fixtures:
+	blender -b --factory-startup --python-exit-code 1 --python blend_fixtures/make_fixtures.py
+	rm -f blend_fixtures/*.blend1
+
+clean:
+	rm -rf $(BUILD) out addon/hairdyn/_native*.so

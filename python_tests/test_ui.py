@@ -1,0 +1,32 @@
+"""A real Blender window under Xvfb: the panel is drawn, its button runs, a screenshot is kept."""
+import json
+import shutil
+import subprocess
+
+import pytest
+
+from conftest import FIXTURES, ROOT
+
+UI_CHECK = ROOT / "python_tests" / "ui_check.py"
+
+
+@pytest.mark.parametrize("fixture, obj", [("head_curves.blend", "Hair"),
+                                          ("head_particles.blend", "Body")])
+def test_panel_in_a_real_window(fixture, obj, artifacts, tmp_path):
+    blender = shutil.which("blender")
+    xvfb_run = shutil.which("xvfb-run")
+    if blender is None or xvfb_run is None:
+        pytest.skip("needs the 'blender' binary and 'xvfb-run' (Debian packages blender, xvfb)")
+    out_json = tmp_path / "ui.json"
+    screenshot = artifacts / f"ui_panel_{obj.lower()}.png"
+    screenshot.unlink(missing_ok=True)
+    command = [xvfb_run, "-a", "-s", "-screen 0 1280x800x24", blender, "--factory-startup",
+               str(FIXTURES / fixture), "--python", str(UI_CHECK), "--", obj, str(out_json),
+               str(screenshot)]
+    process = subprocess.run(command, capture_output=True, text=True, timeout=180)
+    assert out_json.is_file(), process.stdout[-3000:] + process.stderr[-3000:]
+    result = json.loads(out_json.read_text())
+    assert result["error"] is None, result
+    assert result["draw_calls"] > 0
+    assert result["simulate"] == ["FINISHED"]
+    assert screenshot.is_file() and screenshot.stat().st_size > 10_000

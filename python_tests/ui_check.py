@@ -1,0 +1,77 @@
+"""Run inside a real Blender window (xvfb-run): show the hairdyn panel, screenshot it.
+
+    blender --factory-startup FIXTURE --python python_tests/ui_check.py -- OBJECT OUT_JSON OUT_PNG
+"""
+import json
+import sys
+from pathlib import Path
+
+import bpy
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "addon"))
+import hairdyn  # noqa: E402
+
+object_name, out_json, out_png = sys.argv[sys.argv.index("--") + 1:][:3]
+result = {"steps": []}
+
+
+def finish(error=None):
+    result["error"] = error
+    result["draw_calls"] = hairdyn.ui.HAIRDYN_PT_main.draw_calls
+    Path(out_json).write_text(json.dumps(result, indent=2))
+    bpy.ops.wm.quit_blender()
+
+
+def properties_area():
+    window = bpy.context.window_manager.windows[0]
+    areas = [a for a in window.screen.areas if a.type == 'PROPERTIES']
+    return window, (areas[0] if areas else None)
+
+
+def select():
+    obj = bpy.data.objects[object_name]
+    view_layer = bpy.context.view_layer
+    for other in view_layer.objects:
+        other.select_set(other == obj)
+    view_layer.objects.active = obj
+    for area in bpy.context.window_manager.windows[0].screen.areas:
+        area.tag_redraw()  # the properties editor lists the object's tabs after a redraw
+    result["steps"].append("selected")
+    bpy.app.timers.register(show_panel, first_interval=0.5)
+
+
+def show_panel():
+    try:
+        window, area = properties_area()
+        if area is None:  # the file has no properties editor: turn the biggest area into one
+            area = max(window.screen.areas, key=lambda a: a.width * a.height)
+            area.type = 'PROPERTIES'
+        area.spaces.active.context = 'PHYSICS'
+        area.tag_redraw()
+        result["steps"].append("panel shown")
+    except Exception as error:  # reported to the test, which fails with it
+        finish(f"show_panel: {error!r}")
+        return None
+    bpy.app.timers.register(screenshot, first_interval=1.5)
+    return None
+
+
+def screenshot():
+    try:
+        window, area = properties_area()
+        with bpy.context.temp_override(window=window, screen=window.screen, area=area):
+            bpy.ops.screen.screenshot(filepath=out_png)
+        result["steps"].append("screenshot")
+        with bpy.context.temp_override(window=window, screen=window.screen, area=area,
+                                       object=bpy.data.objects[object_name]):
+            result["simulate"] = sorted(bpy.ops.hairdyn.simulate())
+        result["steps"].append("simulated")
+        finish()
+    except Exception as error:
+        finish(f"screenshot: {error!r}")
+    return None
+
+
+if not hasattr(bpy.types.Object, "hairdyn"):
+    hairdyn.register()
+bpy.app.timers.register(select, first_interval=1.0)

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Every hairdyn test: C++ (ctest), then pytest inside Debian's blender 3.4 binary, then pytest
+# with the bpy module of the venv (the newest Blender that installs here). Every suite runs;
+# the script fails if any failed.
+set -uo pipefail
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$ROOT"
+
+passed=0
+failed=0
+failures=()
+suite() {
+  local name=$1
+  shift
+  echo "=== $name: $*"
+  if "$@"; then
+    passed=$((passed + 1))
+  else
+    failed=$((failed + 1))
+    failures+=("$name")
+  fi
+}
+
+export HAIRDYN_ARTIFACTS="$ROOT/out/test_artifacts"
+suite "C++ (ctest)" ctest --test-dir build --output-on-failure --timeout 300
+suite "Python in the blender binary ($(blender --version 2>/dev/null | head -n 1))" \
+  blender -b --factory-startup --python-exit-code 1 --python python_tests/run_in_blender.py -- -q -rs
+suite "Python with the bpy module (bpy $(.venv/bin/python -c 'import importlib.metadata as m; print(m.version("bpy"))'))" \
+  .venv/bin/python -m pytest python_tests -q -rs -p no:cacheprovider
+
+if ((failed)); then
+  echo "failed suites: ${failures[*]}"
+fi
+echo "test suites: $passed passed, $failed failed"
+exit $((failed > 0))
