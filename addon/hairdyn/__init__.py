@@ -15,16 +15,18 @@ bl_info = {
 if "bpy" in locals():
     import importlib
 
-    for _module in (errors, native, properties, bridge, simulation, operators, ui):  # noqa: F821
+    for _module in (errors, native, cache, properties, bridge, playback, simulation, operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy
 
-from . import errors, native, properties, bridge, simulation, operators, ui  # noqa: F401,E402
+from . import errors, native, cache, properties, bridge, playback, simulation, operators, ui  # noqa: F401,E402
 
 classes = (
     properties.HairdynSettings,
     operators.HAIRDYN_OT_simulate,
+    operators.HAIRDYN_OT_bake,
+    operators.HAIRDYN_OT_free_bake,
     ui.HAIRDYN_PT_main,
 )
 
@@ -33,9 +35,11 @@ def register():
     for cls in classes:
         bpy.utils.register_class(cls)
     bpy.types.Object.hairdyn = bpy.props.PointerProperty(type=properties.HairdynSettings)
+    playback.register()
 
 
 def unregister():
+    playback.unregister()
     del bpy.types.Object.hairdyn
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)

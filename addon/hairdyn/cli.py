@@ -4,6 +4,9 @@ In Blender:        blender -b scene.blend --python addon/hairdyn/cli.py -- run -
                        --frames 1 48 --set method=follow --report out.json
 With the bpy module: python addon/hairdyn/cli.py --blend scene.blend run --object Hair ...
 
+`run` simulates into the output objects; `bake` also writes every frame to the cache
+(--cache FOLDER, --resume to continue a bake that stopped).
+
 `--set name=value` sets any property of the object's hairdyn settings by name (enum values
 case-insensitive). Exit codes: 0 success, 1 the simulation failed (message on stderr, the
 report still written when possible), 2 bad command line (unknown object, parameter or value).
@@ -28,13 +31,20 @@ def _arguments(argv):
                                         "binary opens the file given before --python)")
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="simulate a frame range into the output objects")
-    run.add_argument("--object", required=True, help="name of the hair object")
-    run.add_argument("--frames", nargs=2, type=int, metavar=("START", "END"),
-                     help="frame range (default: the object's hairdyn frame range)")
-    run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                     help="set a hairdyn parameter by its property name (repeatable)")
-    run.add_argument("--report", help="write the JSON report here (default: stdout)")
-    run.add_argument("--save", help="save the .blend with the results here")
+    bake = commands.add_parser("bake", help="bake a frame range to the cache (same options as "
+                                            "run, plus --cache and --resume)")
+    for command in (run, bake):
+        command.add_argument("--object", required=True, help="name of the hair object")
+        command.add_argument("--frames", nargs=2, type=int, metavar=("START", "END"),
+                             help="frame range (default: the object's hairdyn frame range)")
+        command.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                             help="set a hairdyn parameter by its property name (repeatable)")
+        command.add_argument("--report", help="write the JSON report here (default: stdout)")
+        command.add_argument("--save", help="save the .blend with the results here")
+    bake.add_argument("--cache", help="cache folder (default: the object's cache folder; a "
+                                      "subfolder named after the object is used)")
+    bake.add_argument("--resume", action="store_true",
+                      help="continue after the last baked frame instead of starting over")
     return parser.parse_args(argv)
 
 
@@ -106,6 +116,30 @@ def _ensure_addon():
     return hairdyn
 
 
+def _progress(frame, ms):
+    print(f"hairdyn: frame {frame} ({ms:.2f} ms)", flush=True)
+
+
+def _bake(args, obj, start, end):
+    """Bake into the cache, one progress line per frame; returns the report."""
+    import bpy
+    from hairdyn import simulation
+
+    settings = obj.hairdyn
+    settings.frame_start, settings.frame_end = start, end
+    if args.cache:
+        settings.cache_directory = str(Path(args.cache).resolve())
+    resume_after = end if args.resume else None
+    runner = simulation.start_bake(bpy.context, obj, resume_after)
+    try:
+        while not runner.done:
+            _progress(*runner.advance())
+    finally:
+        report = simulation.finish_bake(runner)
+    report["cache"] = str(runner.cache.directory)
+    return report
+
+
 def main(argv):
     try:
         args = _arguments(argv)
@@ -133,11 +167,9 @@ def main(argv):
         print(f"hairdyn: error: {error}", file=sys.stderr)
         return USAGE_ERROR
 
-    def progress(frame, ms):
-        print(f"hairdyn: frame {frame} ({ms:.2f} ms)", flush=True)
-
     try:
-        report = simulation.run(bpy.context, obj, start, end, on_frame=progress)
+        report = _bake(args, obj, start, end) if args.command == "bake" else \
+            simulation.run(bpy.context, obj, start, end, on_frame=_progress)
     except HairdynError as error:
         print(f"hairdyn: error: {error}", file=sys.stderr)
         return RUN_ERROR

@@ -1,11 +1,18 @@
 """Thin operators: gather from the context, call the simulation, report errors."""
 import bpy
+from bpy.props import BoolProperty
 
 from .errors import HairdynError
 
 
+def _hair_poll(context):
+    from . import bridge
+
+    return bridge.is_hair_object(context.object)
+
+
 class HAIRDYN_OT_simulate(bpy.types.Operator):
-    """Simulate the hairdyn frame range into the output objects"""
+    """Simulate the hairdyn frame range into the output objects, without baking"""
 
     bl_idname = "hairdyn.simulate"
     bl_label = "Simulate Frame Range"
@@ -13,9 +20,7 @@ class HAIRDYN_OT_simulate(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        from . import bridge
-
-        return bridge.is_hair_object(context.object)
+        return _hair_poll(context)
 
     def execute(self, context):
         from . import simulation
@@ -36,4 +41,132 @@ class HAIRDYN_OT_simulate(bpy.types.Operator):
             scene.frame_set(frame)
         self.report({'INFO'}, f"hairdyn: {report['frames']} frames, "
                               f"{report['ms_per_frame']:.2f} ms per frame")
+        return {'FINISHED'}
+
+
+class HAIRDYN_OT_bake(bpy.types.Operator):
+    """Bake the hairdyn frame range to the cache folder. Esc stops and keeps every frame baked"""
+
+    bl_idname = "hairdyn.bake"
+    bl_label = "Bake"
+    bl_options = {'REGISTER'}
+
+    from_current: BoolProperty(
+        name="From Current Frame", default=False,
+        description="Keep the baked frames before the current frame and bake on from there "
+                    "(resumes a bake that stopped)")
+
+    _runner = None
+    _timer = None
+
+    @classmethod
+    def poll(cls, context):
+        return _hair_poll(context)
+
+    def _start(self, context):
+        from . import simulation
+
+        resume_after = context.scene.frame_current - 1 if self.from_current else None
+        self._frame = context.scene.frame_current
+        self._runner = simulation.start_bake(context, context.object, resume_after)
+
+    def _finish(self, context, cancelled):
+        from . import simulation
+
+        runner, self._runner = self._runner, None
+        report = simulation.finish_bake(runner)
+        context.scene.frame_set(self._frame)
+        baked = len(runner.cache.frames())
+        verb = "Stopped" if cancelled else "Baked"
+        self.report({'WARNING' if cancelled else 'INFO'},
+                    f"{verb}: {baked} frames in the cache, {report['ms_per_frame']:.2f} ms per frame")
+        return report
+
+    def execute(self, context):
+        """Blocking bake (scripts, headless)."""
+        try:
+            self._start(context)
+            while not self._runner.done:
+                self._runner.advance()
+        except HairdynError as error:
+            if self._runner is not None:
+                self._finish(context, cancelled=True)
+            self.report({'ERROR'}, str(error))
+            return {'CANCELLED'}
+        self._finish(context, cancelled=False)
+        return {'FINISHED'}
+
+    def invoke(self, context, _event):
+        try:
+            self._start(context)
+        except HairdynError as error:
+            self.report({'ERROR'}, str(error))
+            return {'CANCELLED'}
+        window_manager = context.window_manager
+        window_manager.progress_begin(self._runner.frame_start, self._runner.frame_end)
+        self._timer = window_manager.event_timer_add(0.001, window=context.window)
+        window_manager.modal_handler_add(self)
+        return {'RUNNING_MODAL'}
+
+    def _end_modal(self, context):
+        window_manager = context.window_manager
+        window_manager.event_timer_remove(self._timer)
+        window_manager.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+    def modal(self, context, event):
+        if event.type == 'ESC':
+            self._end_modal(context)
+            self._finish(context, cancelled=True)
+            return {'CANCELLED'}
+        if event.type != 'TIMER':
+            return {'PASS_THROUGH'}
+        runner = self._runner
+        try:
+            frame, ms = runner.advance()
+        except (HairdynError, ReferenceError) as error:
+            self._end_modal(context)
+            message = str(error) if isinstance(error, HairdynError) else \
+                "The hair object was deleted during the bake"
+            self._finish(context, cancelled=True)
+            self.report({'ERROR'}, f"{message}; the frames baked before are kept")
+            return {'CANCELLED'}
+        context.window_manager.progress_update(frame)
+        if context.workspace is not None:
+            context.workspace.status_text_set(
+                f"hairdyn: baking frame {frame} of {runner.frame_end} ({ms:.1f} ms) - Esc stops")
+        if runner.done:
+            self._end_modal(context)
+            self._finish(context, cancelled=False)
+            return {'FINISHED'}
+        return {'RUNNING_MODAL'}
+
+
+class HAIRDYN_OT_free_bake(bpy.types.Operator):
+    """Delete the baked frames of this hair object from the cache folder"""
+
+    bl_idname = "hairdyn.free_bake"
+    bl_label = "Free Bake"
+    bl_options = {'REGISTER'}
+
+    @classmethod
+    def poll(cls, context):
+        return _hair_poll(context)
+
+    def invoke(self, context, event):
+        return context.window_manager.invoke_confirm(self, event)
+
+    def execute(self, context):
+        from . import playback, simulation
+        from .cache import Cache
+
+        try:
+            directory = simulation.cache_directory(context.object)
+            Cache.open(directory).free()
+        except HairdynError as error:
+            self.report({'ERROR'}, str(error))
+            return {'CANCELLED'}
+        playback.forget(directory)
+        self.report({'INFO'}, f"Freed the bake in '{directory}'")
         return {'FINISHED'}

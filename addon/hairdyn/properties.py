@@ -4,7 +4,7 @@ Solver parameter groups mirror the native parameter structs field for field; a t
 them against hairdyn._native's `fields()` tables so the panel and the solver cannot drift.
 """
 import bpy
-from bpy.props import EnumProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, IntProperty, PointerProperty, StringProperty
 
 METHODS = (
     ("FOLLOW", "Follow Head",
@@ -39,3 +39,24 @@ class HairdynSettings(bpy.types.PropertyGroup):
         name="Output Points", type=bpy.types.Object,
         description="Mesh of loose vertices that receives the simulated points and their "
                     "attributes every frame (created when empty)")
+    cache_directory: StringProperty(
+        name="Cache", subtype='DIR_PATH', default="//hairdyn_cache/",
+        description="Folder the bake writes to; // is relative to the .blend file. Each hair "
+                    "object bakes into a subfolder named after it")
+    use_cache: BoolProperty(
+        name="Play Back Bake", default=True,
+        description="Load the baked frame into the output objects whenever the frame changes")
+
+
+def settings_dict(settings):
+    """The solver parameters of a settings group as plain values (for a cache manifest):
+    every property but object pointers and the cache's own settings."""
+    skip = {"rna_type", "name", "head", "output_curves", "output_points", "cache_directory",
+            "use_cache"}
+    result = {}
+    for prop in settings.bl_rna.properties:
+        if prop.identifier in skip or prop.type == 'POINTER':
+            continue
+        value = getattr(settings, prop.identifier)
+        result[prop.identifier] = list(value) if hasattr(value, "__len__") and not isinstance(value, str) else value
+    return result

@@ -6,10 +6,12 @@ advances the solver; `write()` puts the result into the output objects. Operator
 headless entry point and playback all drive this one class.
 """
 import time
+from pathlib import Path
 
 import numpy as np
 
-from . import bridge, native
+from . import bridge, native, playback
+from .cache import Cache
 from .errors import HairdynError
 
 
@@ -64,11 +66,12 @@ class Simulation:
     def step(self, depsgraph, frame_dt):
         """Advance to the scene's current frame; returns the native stepping time in ms."""
         head_matrix = bridge.object_matrix(self.head, depsgraph)
-        self.previous_positions[:] = self.solver.positions
         start = time.perf_counter()
         self.solver.step(head_matrix)
         elapsed_ms = (time.perf_counter() - start) * 1000.0
-        self.velocities = (self.solver.positions - self.previous_positions) / np.float32(frame_dt)
+        positions = self.solver.positions
+        self.velocities = (positions - self.previous_positions) / np.float32(frame_dt)
+        self.previous_positions[:] = positions
         return elapsed_ms
 
     def stretch(self):
@@ -78,25 +81,43 @@ class Simulation:
     def nonfinite_points(self):
         return self.native.count_nonfinite(self.solver.positions)
 
-    def write(self):
-        """Positions into the output Curves object, points and attributes into the output
-        mesh; creates them when missing. Never writes NaN: a broken frame raises instead."""
+    def frame_arrays(self):
+        """Everything a frame produces, by name: what the cache stores and the outputs show.
+        Never NaN: a broken frame raises instead."""
         broken = self.nonfinite_points()
         if broken:
             raise HairdynError(f"The simulation of '{self.hair_obj.name}' produced {broken} "
-                               "points that are not finite numbers; nothing was written")
-        settings, name = self.settings, self.hair_obj.name
-        settings.output_curves = bridge.ensure_curves_output(
-            settings.output_curves, f"{name}_hairdyn", self.groom.curve_offsets,
-            like=self.hair_obj)
-        settings.output_points = bridge.ensure_points_output(
-            settings.output_points, f"{name}_hairdyn_points", like=self.hair_obj)
+                               "points that are not finite numbers")
         positions = self.solver.positions
-        bridge.write_curves(settings.output_curves, positions)
-        bridge.write_points(settings.output_points, positions, {
-            "direction": point_tangents(self.groom.curve_offsets, positions),
+        return {
+            "position": positions,
             "velocity": self.velocities,
-        })
+            "direction": point_tangents(self.groom.curve_offsets, positions),
+        }
+
+    @staticmethod
+    def frame_columns():
+        """Width of each array of frame_arrays(), in order."""
+        return {"position": 3, "velocity": 3, "direction": 3}
+
+    def restore(self, arrays):
+        """Continue from a cached frame (resuming a bake)."""
+        self.velocities = np.array(arrays["velocity"], dtype=np.float32)
+        self.previous_positions[:] = arrays["position"]
+
+
+def write_outputs(hair_obj, curve_offsets, arrays):
+    """A frame's arrays into the hair object's output objects (created when missing):
+    positions into the output Curves, all arrays as point attributes of the output mesh."""
+    settings, name = hair_obj.hairdyn, hair_obj.name
+    settings.output_curves = bridge.ensure_curves_output(
+        settings.output_curves, f"{name}_hairdyn", curve_offsets, like=hair_obj)
+    settings.output_points = bridge.ensure_points_output(
+        settings.output_points, f"{name}_hairdyn_points", like=hair_obj)
+    positions = arrays["position"]
+    bridge.write_curves(settings.output_curves, positions)
+    bridge.write_points(settings.output_points, positions,
+                        {key: value for key, value in arrays.items() if key != "position"})
 
 
 def frame_dt(scene):
@@ -104,48 +125,152 @@ def frame_dt(scene):
     return scene.render.fps_base / scene.render.fps
 
 
-def run(context, hair_obj, frame_start, frame_end, on_frame=None):
-    """Simulate hair_obj over [frame_start, frame_end], writing every frame to the output
-    objects. Returns the report every solver fills (see README, "Headless runs").
+class Runner:
+    """Steps a Simulation through a frame range, frame by frame: writes each frame to the
+    output objects and, when given one, to a cache. The headless entry point, the operators
+    and the bake all drive this; `advance()` does one frame so a modal operator can stay
+    responsive between frames.
 
-    on_frame(frame, ms) is called after each frame (progress). Frames whose result is not
-    finite are counted in `nan_frames` and not written.
+    With `resume_from` (a cached frame and its arrays) the simulation continues after that
+    frame instead of starting at frame_start (the rest shape is still read at frame_start).
     """
-    import bpy
 
-    if frame_end < frame_start:
-        raise HairdynError(f"The frame range {frame_start}..{frame_end} is empty")
-    scene = context.scene
-    start_time = time.perf_counter()
-    scene.frame_set(frame_start)
-    simulation = Simulation(hair_obj, context.evaluated_depsgraph_get())
-    dt = frame_dt(scene)
-    step_ms, nan_frames, stretch_max = [], 0, 0.0
-    for frame in range(frame_start, frame_end + 1):
-        scene.frame_set(frame)
-        ms = simulation.step(context.evaluated_depsgraph_get(), dt)
-        step_ms.append(ms)
-        if simulation.nonfinite_points():
-            nan_frames += 1
-        else:
-            stretch_max = max(stretch_max, simulation.stretch())
-            simulation.write()
+    def __init__(self, context, hair_obj, frame_start, frame_end, cache=None, resume_from=None):
+        if frame_end < frame_start:
+            raise HairdynError(f"The frame range {frame_start}..{frame_end} is empty")
+        self.context, self.hair_obj, self.cache = context, hair_obj, cache
+        self.frame_start, self.frame_end = frame_start, frame_end
+        self.start_time = time.perf_counter()
+        with playback.suspended():
+            context.scene.frame_set(frame_start)
+        self.simulation = Simulation(hair_obj, context.evaluated_depsgraph_get())
+        if cache is not None:
+            cache.check_topology(self.simulation.groom.curve_offsets)
+        self.dt = frame_dt(context.scene)
+        self.next_frame = frame_start
+        if resume_from is not None:
+            frame, arrays = resume_from
+            self.simulation.restore(arrays)
+            self.next_frame = frame + 1
+        self.step_ms, self.nan_frames, self.stretch_max = [], 0, 0.0
+
+    @property
+    def done(self):
+        return self.next_frame > self.frame_end
+
+    def advance(self):
+        """Simulate, write and cache the next frame; returns (frame, native ms)."""
+        frame = self.next_frame
+        with playback.suspended():
+            self.context.scene.frame_set(frame)
+        ms = self.simulation.step(self.context.evaluated_depsgraph_get(), self.dt)
+        self.step_ms.append(ms)
+        self.next_frame += 1
+        if self.simulation.nonfinite_points():
+            self.nan_frames += 1
+            return frame, ms
+        self.stretch_max = max(self.stretch_max, self.simulation.stretch())
+        arrays = self.simulation.frame_arrays()
+        if self.cache is not None:
+            self.cache.write_frame(frame, arrays)
+        write_outputs(self.hair_obj, self.simulation.groom.curve_offsets, arrays)
+        return frame, ms
+
+    def report(self):
+        """The figures every solver reports (see README, "Headless runs")."""
+        import bpy
+
+        simulation, settings = self.simulation, self.hair_obj.hairdyn
+        return {
+            "object": self.hair_obj.name,
+            "solver": simulation.method.lower(),
+            "strands": simulation.groom.curves_num,
+            "points": simulation.groom.points_num,
+            "frames": len(self.step_ms),
+            "frame_start": self.frame_start,
+            "frame_end": self.frame_end,
+            "ms_per_frame": float(np.median(self.step_ms)) if self.step_ms else 0.0,
+            "total_s": time.perf_counter() - self.start_time,
+            "nan_frames": self.nan_frames,
+            "stretch_max": float(self.stretch_max),
+            "blender_version": bpy.app.version_string,
+            "native_version": simulation.native.__version__,
+            "output_curves": settings.output_curves.name if settings.output_curves else None,
+            "output_points": settings.output_points.name if settings.output_points else None,
+        }
+
+
+def run(context, hair_obj, frame_start, frame_end, on_frame=None):
+    """Simulate hair_obj over [frame_start, frame_end] into the output objects; returns the
+    report. on_frame(frame, ms) is called after each frame (progress)."""
+    runner = Runner(context, hair_obj, frame_start, frame_end)
+    while not runner.done:
+        frame, ms = runner.advance()
         if on_frame is not None:
             on_frame(frame, ms)
-    return {
-        "object": hair_obj.name,
-        "solver": simulation.method.lower(),
-        "strands": simulation.groom.curves_num,
-        "points": simulation.groom.points_num,
-        "frames": len(step_ms),
-        "frame_start": frame_start,
-        "frame_end": frame_end,
-        "ms_per_frame": float(np.median(step_ms)),
-        "total_s": time.perf_counter() - start_time,
-        "nan_frames": nan_frames,
-        "stretch_max": float(stretch_max),
-        "blender_version": bpy.app.version_string,
-        "native_version": simulation.native.__version__,
-        "output_curves": hair_obj.hairdyn.output_curves.name if hair_obj.hairdyn.output_curves else None,
-        "output_points": hair_obj.hairdyn.output_points.name if hair_obj.hairdyn.output_points else None,
-    }
+    return runner.report()
+
+
+def cache_directory(hair_obj):
+    """The object's bake folder: <cache_directory>/<object name>, `//` relative to the .blend."""
+    import bpy
+
+    base = hair_obj.hairdyn.cache_directory
+    if not base:
+        raise HairdynError("Set a cache folder in the hairdyn panel")
+    if base.startswith("//") and not bpy.data.filepath:
+        raise HairdynError(f"Save the .blend file first: the cache folder '{base}' is relative "
+                           "to it")
+    return Path(bpy.path.abspath(base)) / bpy.path.clean_name(hair_obj.name)
+
+
+def start_bake(context, hair_obj, resume_after=None):
+    """A Runner that bakes the object's frame range into its cache.
+
+    resume_after=None bakes from the start (an older bake is replaced). resume_after=frame
+    keeps the cached frames up to that frame and continues after it; this needs an unbroken
+    run of cached frames from the start to there, baked with the same parameters.
+    """
+    from . import properties
+
+    settings = hair_obj.hairdyn
+    directory = cache_directory(hair_obj)
+    parameters = properties.settings_dict(settings)
+    if resume_after is not None:
+        cache = Cache.open(directory)
+        if cache.manifest["parameters"] != parameters:
+            raise HairdynError("The parameters changed since this bake started: bake from the "
+                               "start, or restore them")
+        last = cache.last_contiguous_frame()
+        if last is None or last < cache.manifest["frame_start"]:
+            raise HairdynError(f"There is no baked frame to continue from in '{directory}'")
+        last = min(last, resume_after)
+        if last >= cache.manifest["frame_end"]:
+            raise HairdynError(f"The bake in '{directory}' is already complete")
+        for frame in cache.frames():
+            if frame > last:
+                cache.frame_path(frame).unlink()
+        return Runner(context, hair_obj, cache.manifest["frame_start"], cache.manifest["frame_end"],
+                      cache=cache, resume_from=(last, cache.read_frame(last)))
+    runner = Runner(context, hair_obj, settings.frame_start, settings.frame_end)
+    runner.cache = Cache.create(
+        directory, solver=settings.method.lower(), parameters=parameters,
+        curve_offsets=runner.simulation.groom.curve_offsets,
+        columns=runner.simulation.frame_columns(), frame_start=settings.frame_start,
+        frame_end=settings.frame_end, fps=1.0 / runner.dt,
+        extra={"object": hair_obj.name})
+    playback.forget(directory)
+    return runner
+
+
+def finish_bake(runner):
+    """Records the bake's figures in its manifest; returns the report."""
+    report = runner.report()
+    manifest = runner.cache.manifest
+    manifest["complete"] = runner.cache.last_contiguous_frame() == manifest["frame_end"]
+    manifest["report"] = report
+    manifest["timings"] = {"ms_per_frame": report["ms_per_frame"], "total_s": report["total_s"],
+                           "frames": report["frames"]}
+    runner.cache.save_manifest()
+    playback.forget(runner.cache.directory)
+    return report

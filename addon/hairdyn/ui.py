@@ -1,7 +1,8 @@
 """The hairdyn panel in the Physics tab of hair objects."""
 import bpy
 
-from . import bridge, native
+from . import bridge, native, playback
+from .errors import HairdynError
 
 
 class HAIRDYN_PT_main(bpy.types.Panel):
@@ -36,3 +37,37 @@ class HAIRDYN_PT_main(bpy.types.Panel):
         row = layout.row()
         row.enabled = ok
         row.operator("hairdyn.simulate", icon='PLAY')
+
+        box = layout.box()
+        box.label(text="Cache")
+        box.prop(settings, "cache_directory")
+        box.prop(settings, "use_cache")
+        box.label(text=bake_status(context.object))
+        row = box.row(align=True)
+        row.enabled = ok
+        row.operator("hairdyn.bake", icon='REC').from_current = False
+        row.operator("hairdyn.bake", text="Bake from Current Frame").from_current = True
+        row.operator("hairdyn.free_bake", icon='TRASH', text="")
+        error = playback.last_error(context.object)
+        if error:
+            box.label(text=error, icon='ERROR')
+
+
+def bake_status(obj):
+    """One line: frames baked, ms per frame, the last quality figures."""
+    from . import simulation
+
+    try:
+        opened = playback.open_cache(simulation.cache_directory(obj))
+    except HairdynError as error:
+        return str(error)
+    if opened is None:
+        return "Not baked"
+    cache = opened[0]
+    manifest = cache.manifest
+    total = manifest["frame_end"] - manifest["frame_start"] + 1
+    text = f"Baked {len(cache.frames())}/{total} frames"
+    report = manifest.get("report")
+    if report:
+        text += f", {report['ms_per_frame']:.2f} ms/frame, stretch {report['stretch_max']:.1e}"
+    return text

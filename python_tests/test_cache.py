@@ -1,0 +1,188 @@
+"""Bake to a cache on disk, play it back, resume it; bad caches give errors naming files."""
+import json
+import shutil
+
+import bpy
+import numpy as np
+import pytest
+
+from conftest import FIXTURES
+from hairdyn import bridge, playback, simulation
+from hairdyn.cache import Cache, CacheError
+
+
+def make_cache(directory, points=6, offsets=(0, 3, 6)):
+    return Cache.create(directory, solver="follow", parameters={"a": 1},
+                        curve_offsets=np.array(offsets, np.int32),
+                        columns={"position": 3, "density": 1}, frame_start=1, frame_end=4,
+                        fps=24.0)
+
+
+def frame_data(points=6, seed=0):
+    rng = np.random.default_rng(seed)
+    return {"position": rng.normal(size=(points, 3)).astype(np.float32),
+            "density": rng.random(points).astype(np.float32)}
+
+
+def test_cache_round_trip(tmp_path):
+    cache = make_cache(tmp_path / "c")
+    data = frame_data()
+    cache.write_frame(2, data)
+    cache.write_frame(1, frame_data(seed=1))
+    assert cache.frames() == [1, 2]
+    assert sorted(p.name for p in (tmp_path / "c").iterdir()) == [
+        "curve_offsets.npy", "frame_000001.npy", "frame_000002.npy", "manifest.json"]
+    back = Cache.open(tmp_path / "c").read_frame(2)
+    assert np.array_equal(back["position"], data["position"])
+    assert np.array_equal(back["density"], data["density"])
+    assert Cache.open(tmp_path / "c").last_contiguous_frame() == 2
+    manifest = json.loads((tmp_path / "c" / "manifest.json").read_text())
+    assert manifest["format"] == "hairdyn-cache" and manifest["version"] == 1
+    assert manifest["topology"]["points"] == 6 and manifest["columns"]["density"] == [3, 4]
+
+
+def test_nan_frame_is_refused_and_nothing_is_written(tmp_path):
+    cache = make_cache(tmp_path)
+    data = frame_data()
+    data["density"][3] = np.nan
+    with pytest.raises(CacheError, match="Frame 3 has values that are not finite numbers in density"):
+        cache.write_frame(3, data)
+    assert cache.frames() == [] and not list(tmp_path.glob("*.tmp"))
+
+
+def test_truncated_and_corrupted_frames_name_the_file(tmp_path):
+    cache = make_cache(tmp_path)
+    cache.write_frame(1, frame_data())
+    path = cache.frame_path(1)
+    path.write_bytes(path.read_bytes()[:-20])
+    with pytest.raises(CacheError, match="frame_000001.npy' is corrupted or truncated"):
+        cache.read_frame(1)
+    path.write_bytes(b"not a numpy file at all")
+    with pytest.raises(CacheError, match="frame_000001.npy' is corrupted or truncated"):
+        cache.read_frame(1)
+    np.save(path, np.zeros((5, 4), np.float32))
+    with pytest.raises(CacheError, match=r"frame_000001.npy' holds float32 \(5, 4\)"):
+        cache.read_frame(1)
+    with pytest.raises(CacheError, match="frame_000002.npy' is missing"):
+        cache.read_frame(2)
+
+
+def test_topology_and_version_mismatch(tmp_path):
+    cache = make_cache(tmp_path)
+    with pytest.raises(CacheError, match="baked from another groom .2 strands, 6 points; this "
+                                         "one has 1 strands, 6 points"):
+        cache.check_topology(np.array([0, 6], np.int32))
+    manifest = json.loads(Cache.manifest_path(tmp_path).read_text())
+    manifest["version"] = 99
+    Cache.manifest_path(tmp_path).write_text(json.dumps(manifest))
+    with pytest.raises(CacheError, match="format version 99"):
+        Cache.open(tmp_path)
+    Cache.manifest_path(tmp_path).write_text("{ torn")
+    with pytest.raises(CacheError, match="manifest.json' cannot be read"):
+        Cache.open(tmp_path)
+    with pytest.raises(CacheError, match="no hairdyn cache in"):
+        Cache.open(tmp_path / "nothing")
+
+
+def test_unwritable_cache_directory(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("a file where a folder should be")
+    with pytest.raises(CacheError, match="Cannot create the cache directory"):
+        make_cache(blocker / "cache")
+
+
+@pytest.fixture
+def saved_shake(tmp_path):
+    """head_shake.blend saved into tmp_path, so '//' caches land there."""
+    path = tmp_path / "shake.blend"
+    shutil.copy(FIXTURES / "head_shake.blend", path)
+    bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
+    hair = bpy.data.objects["Hair"]
+    hair.hairdyn.frame_end = 24
+    return hair, tmp_path
+
+
+def read_output(hair):
+    return bridge.read_curves(hair.hairdyn.output_curves,
+                              bpy.context.evaluated_depsgraph_get()).positions_wo
+
+
+def test_bake_playback_and_reopen(saved_shake):
+    hair, tmp_path = saved_shake
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    directory = tmp_path / "hairdyn_cache" / "Hair"
+    cache = Cache.open(directory)
+    assert cache.frames() == list(range(1, 25))
+    assert cache.manifest["complete"] and cache.manifest["solver"] == "follow"
+    assert cache.manifest["report"]["frames"] == 24
+    # Scrubbing loads any cached frame into the output objects, backwards too.
+    for frame in (20, 3, 12):
+        bpy.context.scene.frame_set(frame)
+        assert np.array_equal(read_output(hair), cache.read_frame(frame)["position"])
+    # The bake survives saving and reopening; the handler is still there.
+    bpy.ops.wm.save_mainfile()
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "shake.blend"), load_ui=False)
+    hair = bpy.data.objects["Hair"]
+    assert playback.on_frame_change in bpy.app.handlers.frame_change_post
+    bpy.context.scene.frame_set(7)
+    assert np.array_equal(read_output(hair), cache.read_frame(7)["position"])
+    assert bpy.ops.hairdyn.free_bake() == {'FINISHED'}
+    assert not directory.exists() or not any(directory.iterdir())
+
+
+def test_bake_is_deterministic_and_resumes_exactly(saved_shake):
+    hair, tmp_path = saved_shake
+    bpy.context.view_layer.objects.active = hair
+    directory = tmp_path / "hairdyn_cache" / "Hair"
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    first = {f: Cache.open(directory).frame_path(f).read_bytes() for f in range(1, 25)}
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    second = {f: Cache.open(directory).frame_path(f).read_bytes() for f in range(1, 25)}
+    assert first == second  # byte-identical frames
+    # A bake that stopped after frame 10 resumes from there.
+    for frame in range(11, 25):
+        Cache.open(directory).frame_path(frame).unlink()
+    bpy.context.scene.frame_set(11)
+    assert bpy.ops.hairdyn.bake(from_current=True) == {'FINISHED'}
+    resumed = {f: Cache.open(directory).frame_path(f).read_bytes() for f in range(1, 25)}
+    assert resumed == first
+
+
+def test_resume_with_changed_parameters_is_refused(saved_shake):
+    hair, _ = saved_shake
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    hair.hairdyn.frame_end = 30
+    with pytest.raises(RuntimeError, match="parameters changed"):
+        bpy.ops.hairdyn.bake(from_current=True)
+
+
+def test_cache_of_another_groom_is_an_error(saved_shake):
+    hair, tmp_path = saved_shake
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    other = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
+    other_offsets = np.array([0, 2700], np.int32)
+    with pytest.raises(CacheError, match="another groom"):
+        other.check_topology(other_offsets)
+    # Playback of a cache whose topology file does not match its manifest: message, no crash.
+    np.save(tmp_path / "hairdyn_cache" / "Hair" / "curve_offsets.npy", other_offsets)
+    playback.forget()
+    bpy.context.scene.frame_set(5)
+    assert "does not match its manifest" in playback.last_error(hair)
+
+
+def test_unsaved_file_with_relative_cache_is_a_clear_error(empty_scene):
+    from hairdyn.errors import HairdynError
+
+    assert bpy.data.filepath == ""
+    hair = bpy.data.objects.new("Hair", bpy.data.hair_curves.new("Hair"))
+    empty_scene.collection.objects.link(hair)
+    assert hair.hairdyn.cache_directory == "//hairdyn_cache/"
+    with pytest.raises(HairdynError, match="Save the .blend file first"):
+        simulation.cache_directory(hair)
+    bpy.context.view_layer.objects.active = hair
+    with pytest.raises(RuntimeError, match="Save the .blend file first"):
+        bpy.ops.hairdyn.bake()
+    assert playback.load_frame(hair, 1) is False  # playback stays quiet: nothing was baked
