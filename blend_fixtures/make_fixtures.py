@@ -196,6 +196,7 @@ def configure(obj, frame_end):
     if not hasattr(bpy.types.Object, "hairdyn"):
         hairdyn.register()
     obj.hairdyn.frame_start, obj.hairdyn.frame_end = 1, frame_end
+    obj.hairdyn.enabled = True
 
 
 def save(name):

@@ -66,3 +66,26 @@ def test_follow_particle_hair(open_fixture):
     scene.frame_set(10)
     expected = bridge.read_particle_hair(body, depsgraph())
     assert np.abs(out.positions_wo - expected.positions_wo).max() < 1e-5
+
+
+def test_live_playback_steps_and_restarts_like_cloth(open_fixture):
+    scene = open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    assert hair.hairdyn.enabled and hair.hairdyn.use_live
+    scene.frame_set(1)  # the start frame (re)starts the simulation and creates the outputs
+    assert hair.hairdyn.output_curves is not None
+    for frame in range(2, 13):
+        scene.frame_set(frame)
+    at_12 = bridge.read_curves(hair.hairdyn.output_curves, depsgraph()).positions_wo
+    expected = bridge.read_curves(hair, depsgraph()).positions_wo
+    assert np.abs(at_12 - expected).max() < 2e-6
+    scene.frame_set(40)  # a jump is not simulated: the outputs keep frame 12
+    assert np.array_equal(
+        bridge.read_curves(hair.hairdyn.output_curves, depsgraph()).positions_wo, at_12)
+    scene.frame_set(41)  # nor is the frame after the jump
+    assert np.array_equal(
+        bridge.read_curves(hair.hairdyn.output_curves, depsgraph()).positions_wo, at_12)
+    hair.hairdyn.enabled = False
+    scene.frame_set(1)
+    assert np.array_equal(
+        bridge.read_curves(hair.hairdyn.output_curves, depsgraph()).positions_wo, at_12)

@@ -1,8 +1,10 @@
-"""Frame-change playback of baked caches into the output objects.
+"""Frame-change playback into the output objects: baked frames, else live simulation.
 
-A persistent frame_change_post handler loads the current frame of every hair object whose
-settings play back a bake. It survives saving and reopening the file; caches are re-read
-when their manifest changes on disk.
+A persistent frame_change_post handler, for every hair object of the scene:
+  - loads the current frame from the bake when it is baked (use_cache), else
+  - simulates live (use_live), like Blender's cloth: the simulation restarts at the start
+    frame and steps when the frame advances by one; other jumps leave the outputs as they are.
+It survives saving and reopening the file; caches are re-read when their manifest changes.
 """
 import contextlib
 
@@ -14,6 +16,7 @@ from .errors import HairdynError
 _open_caches = {}  # cache directory -> (manifest mtime, Cache, curve_offsets)
 _errors = {}  # object name -> the last playback error, shown in the panel
 _suspended = [0]  # > 0 while a simulation moves the frame itself
+_live = {}  # object name -> [Simulation, last simulated frame]
 
 
 @contextlib.contextmanager
@@ -74,17 +77,41 @@ def load_frame(obj, frame):
     return True
 
 
+def live_step(obj, scene, depsgraph):
+    """Simulate obj live for the scene's current frame; True when the outputs changed."""
+    from . import simulation
+
+    settings, frame = obj.hairdyn, scene.frame_current
+    if frame == settings.frame_start:
+        live = simulation.Simulation(obj, depsgraph)
+        _live[obj.name] = [live, frame]
+    else:
+        known = _live.get(obj.name)
+        if known is None or known[1] + 1 != frame or frame > settings.frame_end:
+            return False
+        live = known[0]
+        live.step(depsgraph, simulation.frame_dt(scene))
+        known[1] = frame
+    simulation.write_outputs(obj, live.groom.curve_offsets, live.frame_arrays())
+    return True
+
+
 @persistent
-def on_frame_change(scene, _depsgraph=None):
+def on_frame_change(scene, depsgraph=None):
     if _suspended[0] or not hasattr(bpy.types.Object, "hairdyn"):
         return
     from . import bridge
 
+    depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
     for obj in scene.objects:
-        if not obj.hairdyn.use_cache or not bridge.is_hair_object(obj):
+        settings = obj.hairdyn
+        if not settings.enabled or not bridge.is_hair_object(obj):
             continue
         try:
-            load_frame(obj, scene.frame_current)
+            with suspended():  # reading hair may evaluate the scene: no re-entry
+                if not (settings.use_cache and load_frame(obj, scene.frame_current)) \
+                        and settings.use_live:
+                    live_step(obj, scene, depsgraph)
             _errors.pop(obj.name, None)
         except HairdynError as error:
             if _errors.get(obj.name) != str(error):
@@ -96,6 +123,7 @@ def on_frame_change(scene, _depsgraph=None):
 def on_load(_filepath=None, _unused=None):
     forget()
     _errors.clear()
+    _live.clear()
 
 
 def register():
@@ -111,3 +139,4 @@ def unregister():
         while handler in handlers:
             handlers.remove(handler)
     forget()
+    _live.clear()

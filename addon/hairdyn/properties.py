@@ -18,6 +18,10 @@ def _is_mesh(_self, obj):
 
 
 class HairdynSettings(bpy.types.PropertyGroup):
+    enabled: BoolProperty(
+        name="hairdyn", default=False,
+        description="Simulate this hair with hairdyn: play back its bake, or simulate it live, "
+                    "whenever the frame changes")
     method: EnumProperty(
         name="Method", items=METHODS, default="FOLLOW",
         description="How the hair moves")
@@ -46,13 +50,17 @@ class HairdynSettings(bpy.types.PropertyGroup):
     use_cache: BoolProperty(
         name="Play Back Bake", default=True,
         description="Load the baked frame into the output objects whenever the frame changes")
+    use_live: BoolProperty(
+        name="Simulate on Playback", default=True,
+        description="Where no frame is baked, simulate while the animation plays: restart at "
+                    "the start frame, step when the frame advances by one (like cloth)")
 
 
 def settings_dict(settings):
     """The solver parameters of a settings group as plain values (for a cache manifest):
     every property but object pointers and the cache's own settings."""
-    skip = {"rna_type", "name", "head", "output_curves", "output_points", "cache_directory",
-            "use_cache"}
+    skip = {"rna_type", "name", "enabled", "head", "output_curves", "output_points", "cache_directory",
+            "use_cache", "use_live"}
     result = {}
     for prop in settings.bl_rna.properties:
         if prop.identifier in skip or prop.type == 'POINTER':

@@ -236,6 +236,7 @@ def start_bake(context, hair_obj, resume_after=None):
     settings = hair_obj.hairdyn
     directory = cache_directory(hair_obj)
     parameters = properties.settings_dict(settings)
+    settings.enabled = True  # a baked object plays its bake back
     if resume_after is not None:
         cache = Cache.open(directory)
         if cache.manifest["parameters"] != parameters:

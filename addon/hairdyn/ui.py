@@ -17,6 +17,9 @@ class HAIRDYN_PT_main(bpy.types.Panel):
     def poll(cls, context):
         return bridge.is_hair_object(context.object)
 
+    def draw_header(self, context):
+        self.layout.prop(context.object.hairdyn, "enabled", text="")
+
     def draw(self, context):
         type(self).draw_calls += 1
         layout = self.layout
