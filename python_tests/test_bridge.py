@@ -192,7 +192,7 @@ def test_bindings_reject_non_contiguous_and_lists():
 
 
 def make_hair(scene, sizes, name="BadHair"):
-    curves = bridge._new_curves_data(name, sizes)
+    curves = bridge.new_curves_data(name, sizes)
     obj = bpy.data.objects.new(name, curves)
     scene.collection.objects.link(obj)
     return obj

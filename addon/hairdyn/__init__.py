@@ -15,18 +15,22 @@ bl_info = {
 if "bpy" in locals():
     import importlib
 
-    for _module in (errors, native, cache, properties, bridge, playback, simulation, operators, ui):  # noqa: F821
+    for _module in (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: F821
+                    simulation, operators, io_import, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy
 
-from . import errors, native, cache, properties, bridge, playback, simulation, operators, ui  # noqa: F401,E402
+from . import (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: E402
+               simulation, operators, io_import, ui)
 
 classes = (
     properties.HairdynSettings,
     operators.HAIRDYN_OT_simulate,
     operators.HAIRDYN_OT_bake,
     operators.HAIRDYN_OT_free_bake,
+    io_import.HAIRDYN_OT_import_tfx,
+    io_import.HAIRDYN_OT_import_cem_hair,
     ui.HAIRDYN_PT_main,
 )
 
@@ -36,9 +40,11 @@ def register():
         bpy.utils.register_class(cls)
     bpy.types.Object.hairdyn = bpy.props.PointerProperty(type=properties.HairdynSettings)
     playback.register()
+    io_import.register()
 
 
 def unregister():
+    io_import.unregister()
     playback.unregister()
     del bpy.types.Object.hairdyn
     for cls in reversed(classes):

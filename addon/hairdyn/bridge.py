@@ -225,7 +225,7 @@ def _link_like(new_obj, like):
     target.objects.link(new_obj)
 
 
-def _new_curves_data(name, sizes):
+def new_curves_data(name, sizes):
     """A Curves ID with the given points per curve, on any supported Blender.
 
     Newer Blender resizes Curves directly (Curves.add_curves). Older Blender has no such API,
@@ -280,7 +280,7 @@ def ensure_curves_output(obj, name, curve_offsets, like=None):
     """
     if obj is not None and obj.type == 'CURVES' and _topology_matches(obj.data, curve_offsets):
         return obj
-    curves = _new_curves_data(name, np.diff(curve_offsets))
+    curves = new_curves_data(name, np.diff(curve_offsets))
     if like is not None and like.type == 'CURVES':
         for material in like.data.materials:
             curves.materials.append(material)

@@ -1,0 +1,133 @@
+"""File > Import of hair files: TressFX 3 / 4 and Cem Yuksel's .hair, and Sintel's real groom."""
+import struct
+
+import bpy
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from hairdyn import bridge
+from hairdyn.hair_formats import HairFileError, read_cem_hair, read_tfx
+from hairdyn.io_import import FIXED_ATTRIBUTE
+
+SINTEL = ROOT.parent / "shared" / "data" / "sintel"
+
+
+def strands(strands_num=3, points=4):
+    rng = np.random.default_rng(5)
+    return rng.normal(size=(strands_num, points, 3)).astype(np.float32)
+
+
+def write_tfx4(path, positions, fixed_per_strand=1):
+    strands_num, points, _ = positions.shape
+    xyzw = np.ones((strands_num, points, 4), np.float32)
+    xyzw[..., :3] = positions
+    xyzw[:, :fixed_per_strand, 3] = 0.0
+    header = struct.pack("<fII5I", 4.0, strands_num, points, 160, 0, 0, 0, 0) + bytes(160 - 32)
+    path.write_bytes(header + xyzw.tobytes())
+
+
+def write_tfx3(path, positions, both_ends=0):
+    strands_num, points, _ = positions.shape
+    header = struct.pack("<fIIII", 3.0, strands_num, points, 0, both_ends) + bytes(31 * 4)
+    header += struct.pack("<6I", 296, 0, 0, 0, 0, 0) + bytes(32 * 4)
+    assert len(header) == 296
+    path.write_bytes(header + positions.tobytes())
+
+
+def write_cem(path, segments, points, thickness=None):
+    arrays = 1 | 2 | (4 if thickness is not None else 0)
+    header = b"HAIR" + struct.pack("<4I2f3f", len(segments), len(points), arrays, 0, 0.0, 1.0,
+                                   0, 0, 0) + bytes(88)
+    assert len(header) == 128
+    body = np.asarray(segments, np.uint16).tobytes() + np.asarray(points, np.float32).tobytes()
+    if thickness is not None:
+        body += np.asarray(thickness, np.float32).tobytes()
+    path.write_bytes(header + body)
+
+
+def test_tfx4_and_tfx3(tmp_path):
+    positions = strands()
+    write_tfx4(tmp_path / "a.tfx", positions, fixed_per_strand=2)
+    hair = read_tfx(tmp_path / "a.tfx")
+    assert np.array_equal(hair.positions, positions.reshape(-1, 3))
+    assert np.array_equal(hair.curve_offsets, [0, 4, 8, 12])
+    assert np.array_equal(hair.fixed.reshape(3, 4), [[1, 1, 0, 0]] * 3)
+    write_tfx3(tmp_path / "b.tfx", positions, both_ends=1)
+    hair = read_tfx(tmp_path / "b.tfx")
+    assert np.array_equal(hair.positions, positions.reshape(-1, 3))
+    assert np.array_equal(hair.fixed.reshape(3, 4), [[1, 0, 0, 1]] * 3)
+
+
+def test_cem_hair(tmp_path):
+    points = np.arange(7 * 3, dtype=np.float32).reshape(7, 3)
+    write_cem(tmp_path / "a.hair", [2, 3], points, thickness=np.full(7, 0.02))
+    hair = read_cem_hair(tmp_path / "a.hair")
+    assert np.array_equal(hair.curve_offsets, [0, 3, 7])
+    assert np.array_equal(hair.positions, points)
+    assert np.array_equal(np.flatnonzero(hair.fixed), [0, 3])
+    assert np.allclose(hair.thickness, 0.02)
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda p: p.write_bytes(b"HAIR" + bytes(10)), "not a .hair file"),
+    (lambda p: write_cem(p, [2, 3], np.zeros((6, 3))), "says 6 points but its 2 strands have 7"),
+    (lambda p: p.write_bytes(b"HAIR" + struct.pack("<4I", 2, 8, 2, 3) + bytes(108 + 10)),
+     r"bad.hair' is truncated: its points need bytes"),
+])
+def test_bad_cem_hair(tmp_path, make, message):
+    path = tmp_path / "bad.hair"
+    make(path)
+    with pytest.raises(HairFileError, match=message):
+        read_cem_hair(path)
+
+
+def test_bad_tfx(tmp_path):
+    path = tmp_path / "bad.tfx"
+    write_tfx4(path, strands())
+    path.write_bytes(path.read_bytes()[:-8])
+    with pytest.raises(HairFileError, match=r"bad.tfx' is truncated: its positions need bytes"):
+        read_tfx(path)
+    path.write_bytes(struct.pack("<fII", 2.0, 3, 4) + bytes(400))
+    with pytest.raises(HairFileError, match="TressFX version 2; hairdyn reads 3.0 and 4.0"):
+        read_tfx(path)
+
+
+def test_import_operator_makes_curves(tmp_path, empty_scene):
+    positions = strands()
+    write_tfx4(tmp_path / "groom.tfx", positions)
+    assert bpy.ops.hairdyn.import_tfx(filepath=str(tmp_path / "groom.tfx")) == {'FINISHED'}
+    obj = bpy.context.view_layer.objects.active
+    assert obj.name == "groom" and obj.type == 'CURVES'
+    groom = bridge.read_curves(obj, bpy.context.evaluated_depsgraph_get())
+    flat = positions.reshape(-1, 3)
+    assert np.allclose(groom.positions_wo, np.c_[flat[:, 0], -flat[:, 2], flat[:, 1]])
+    fixed = np.empty(12, bool)
+    obj.data.attributes[FIXED_ATTRIBUTE].data.foreach_get("value", fixed)
+    assert np.array_equal(fixed.reshape(3, 4)[:, 0], [True] * 3)
+    assert not fixed.reshape(3, 4)[:, 1:].any()
+    (tmp_path / "broken.tfx").write_bytes(b"\x00\x00")
+    with pytest.raises(RuntimeError, match="too short to be a TressFX file"):
+        bpy.ops.hairdyn.import_tfx(filepath=str(tmp_path / "broken.tfx"))
+
+
+def test_sintel_hair_sits_on_sintel_bust(empty_scene):
+    if not SINTEL.is_dir():
+        pytest.skip(f"needs the Sintel assets in {SINTEL}")
+    assert bpy.ops.hairdyn.import_tfx(filepath=str(SINTEL / "sintel_hair.tfx")) == {'FINISHED'}
+    hair = bpy.context.view_layer.objects.active
+    if hasattr(bpy.ops.wm, "obj_import"):
+        bpy.ops.wm.obj_import(filepath=str(SINTEL / "sintel_bust.obj"))
+    else:
+        bpy.ops.import_scene.obj(filepath=str(SINTEL / "sintel_bust.obj"))
+    bust = next(o for o in bpy.context.scene.objects if o.type == 'MESH')
+    graph = bpy.context.evaluated_depsgraph_get()
+    groom = bridge.read_curves(hair, graph)
+    assert groom.curves_num == 228 and groom.points_num == 228 * 32
+    mesh = bridge.read_mesh(bust, graph)
+    assert len(mesh.vertices) == 3046 and len(mesh.triangles) == 5952
+    vertices = mesh.vertices_wo()
+    assert vertices[:, 2].max() - vertices[:, 2].min() > 20  # Z is up after the import
+    roots = groom.positions_wo[groom.curve_offsets[:-1]]
+    nearest = np.min(np.linalg.norm(vertices[None] - roots[:, None], axis=2), axis=1)
+    assert np.median(nearest) < 1.0 and nearest.max() < 2.5
