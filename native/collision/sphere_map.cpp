@@ -1,5 +1,7 @@
 #include "collision/sphere_map.hh"
 
+#include <algorithm>
+
 #include "core/parallel.hh"
 
 namespace hairdyn {
@@ -25,8 +27,11 @@ SphereMap::SphereMap(const TriangleBVH &bvh, const Span<vec3> vertices,
       }
     }
   });
+  fill_cell_from_ray(bvh, vertices, triangles, map_to_object, vec3(0.0f), vec3(0, 1, 0), north_);
+  fill_cell_from_ray(bvh, vertices, triangles, map_to_object, vec3(0.0f), vec3(0, -1, 0), south_);
   table_.update_max_radius();
-  max_radius_sq_ = table_.max_radius() * table_.max_radius();
+  const float max_radius = std::max(table_.max_radius(), std::max(north_.radius, south_.radius));
+  max_radius_sq_ = max_radius * max_radius;
 }
 
 bool SphereMap::evaluate(const vec3 &p_object, MapSample &r_sample) const

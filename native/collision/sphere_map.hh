@@ -5,8 +5,9 @@
  * nearest-point approximation (eq. 11) as the cylindrical map. Rays start at the centre and
  * keep the outermost hit; a missed ray leaves its cell empty.
  *
- * Samples: θ_i = 2π i / m (wrapping), φ_j = (j + ½) π / n; near the poles the table is
- * clamped to its first and last rows. */
+ * Samples: θ_i = 2π i / m (wrapping), φ_j = (j + ½) π / n, plus one ray along each pole
+ * (φ = 0 and φ = π): within half a row of a pole the first or last row is blended linearly
+ * into the pole's sample, so the normal there does not inherit the row's tilt. */
 #include "collision/radial_map.hh"
 
 namespace hairdyn {
@@ -31,12 +32,22 @@ class SphereMap {
     float u = fast_atan2(p_sph.z, p_sph.x) * u_per_radian_;
     u = u < 0.0f ? u + float(table_.u_num()) : u;
     const float phi = fast_atan2(rho_xz, p_sph.y);
-    const float v = std::min(std::max(phi * v_per_radian_ - 0.5f, 0.0f),
-                             float(table_.v_num() - 1));
+    const float v_last = float(table_.v_num() - 1);
+    const float v = phi * v_per_radian_ - 0.5f;
     float r_q;
     vec3 normal;
-    if (!table_.lookup(u, v, r_q, normal)) {
+    if (!table_.lookup(u, std::min(std::max(v, 0.0f), v_last), r_q, normal)) {
       return false;
+    }
+    if (v < 0.0f || v > v_last) {
+      /* Between the first (last) row and the pole: w = 1 at the pole. */
+      const MapCell &pole = v < 0.0f ? north_ : south_;
+      if (pole.radius < 0.0f) {
+        return false;
+      }
+      const float w = v < 0.0f ? -2.0f * v : 2.0f * (v - v_last);
+      r_q += w * (pole.radius - r_q);
+      normal = glm::normalize(normal + w * (pole.normal - normal));
     }
     /* Q: same direction from the centre as P, at radius r_q. */
     const vec3 direction = r_p > 0.0f ? p_sph * (1.0f / r_p) : vec3(0.0f, 1.0f, 0.0f);
@@ -59,6 +70,7 @@ class SphereMap {
   MapFrame frame_;
   mat4 object_to_map_{1.0f};
   RadialTable table_;
+  MapCell north_, south_; /* The rays along +y and -y. */
   float u_per_radian_ = 0.0f;
   float v_per_radian_ = 0.0f;
   float max_radius_sq_ = 0.0f;
