@@ -97,7 +97,9 @@ std::string find_collider_error(const ColliderMesh &mesh, const Span<int32_t> pa
 Collider::Collider(const ColliderMesh &mesh, const Span<int32_t> part_offsets,
                    const Span<int32_t> part_vertices, const CollisionParams &params,
                    const Span<MapFrame> part_frames)
-    : params_(params)
+    : params_(params),
+      boundary_edges_num_(mesh.boundary_edges_num()),
+      skipped_triangles_num_(mesh.skipped_triangles_num())
 {
   assert(find_collider_error(mesh, part_offsets, part_vertices, part_frames.size()).empty());
   const auto start = std::chrono::steady_clock::now();
@@ -222,6 +224,17 @@ void Collider::set_transform(const mat4 &object_to_world)
 {
   object_to_world_ = object_to_world;
   const mat4 world_to_object = glm::inverse(object_to_world);
+  /* Similarity test: the columns of the linear part are orthogonal and of equal length. */
+  const mat3 linear(object_to_world);
+  const mat3 gram = glm::transpose(linear) * linear;
+  const float scale_sq = (gram[0][0] + gram[1][1] + gram[2][2]) / 3.0f;
+  float off = 0.0f;
+  for (int i = 0; i < 3; i++) {
+    for (int j = 0; j < 3; j++) {
+      off = std::max(off, std::abs(gram[i][j] - (i == j ? scale_sq : 0.0f)));
+    }
+  }
+  similarity_scale_ = scale_sq > 0.0f && off <= 1e-5f * scale_sq ? std::sqrt(scale_sq) : 0.0f;
   for (Part &part : parts_) {
     const MapFrame &frame = part.map.frame();
     const mat4 map_to_world = object_to_world * frame.map_to_object();

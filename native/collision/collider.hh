@@ -103,14 +103,19 @@ class Collider {
         continue;
       }
       const vec3 surface_wo = part.map_to_world.apply(sample.surface_point);
-      const float depth_wo = glm::length(surface_wo - p_wo);
+      /* A similarity (rotation, translation, uniform scale) keeps distances and normals up to
+       * the scale; other affine maps need the lengths measured again. */
+      const float depth_wo = similarity_scale_ > 0.0f ? sample.depth * similarity_scale_ :
+                                                        glm::length(surface_wo - p_wo);
       if (found && depth_wo <= r_contact.depth) {
         continue;
       }
       found = true;
       r_contact.depth = depth_wo;
       r_contact.surface_point_wo = surface_wo;
-      r_contact.normal_wo = glm::normalize(part.normal_to_world * sample.normal);
+      const vec3 normal_wo = part.normal_to_world * sample.normal;
+      r_contact.normal_wo = similarity_scale_ > 0.0f ? normal_wo * similarity_scale_ :
+                                                       glm::normalize(normal_wo);
     }
     return found;
   }
@@ -128,6 +133,9 @@ class Collider {
   float size_wo() const { return size_ * uniform_scale(object_to_world_); }
   const mat4 &object_to_world() const { return object_to_world_; }
   const MeshDistance &exact() const { return exact_; }
+  /* What ColliderMesh reported at construction, for the caller to warn about. */
+  int64_t boundary_edges_num() const { return boundary_edges_num_; }
+  int64_t skipped_triangles_num() const { return skipped_triangles_num_; }
   const CollisionParams &params() const { return params_; }
   Span<vec3> vertices() const { return vertices_; }
   Span<ivec3> triangles() const { return triangles_; }
@@ -152,7 +160,10 @@ class Collider {
   MeshDistance exact_;
   float size_ = 0.0f;
   mat4 object_to_world_{1.0f};
+  float similarity_scale_ = 1.0f; /* Uniform scale of object_to_world_, 0 if not a similarity. */
   double build_ms_ = 0.0;
+  int64_t boundary_edges_num_ = 0;
+  int64_t skipped_triangles_num_ = 0;
 };
 
 /* Empty when a Collider can be built from the mesh and parts; otherwise one sentence (no

@@ -29,6 +29,27 @@ class CylinderMap {
    * to filled cells); false elsewhere. */
   bool evaluate_map(const vec3 &p_cyl, MapSample &r_sample) const
   {
+    return sample_map(p_cyl, false, r_sample);
+  }
+
+  /* Inside test and contact (Kurihara 1993 §3.1): true when P is inside, with eq. 11's
+   * nearest surface point T, depth |PT| along N and N. */
+  bool find_contact_map(const vec3 &p_cyl, MapSample &r_sample) const
+  {
+    /* Cheap rejections first: most hair nodes are far outside. */
+    if (p_cyl.x * p_cyl.x + p_cyl.z * p_cyl.z >= max_radius_sq_) {
+      return false;
+    }
+    return sample_map(p_cyl, true, r_sample);
+  }
+
+  /* Object-space conveniences (not for the per-step path). */
+  bool evaluate(const vec3 &p_object, MapSample &r_sample) const;
+
+ private:
+  /* With inside_only, returns false for points outside before computing the normal. */
+  bool sample_map(const vec3 &p_cyl, const bool inside_only, MapSample &r_sample) const
+  {
     if (!(p_cyl.y >= y_min_ && p_cyl.y <= y_max_)) {
       return false;
     }
@@ -40,10 +61,11 @@ class CylinderMap {
     const float v = std::min(std::max((p_cyl.y - y_min_) * v_per_unit_ - 0.5f, 0.0f),
                              float(table_.v_num() - 1));
     float r_q;
-    vec3 normal;
-    if (!table_.lookup(u, v, r_q, normal)) {
+    RadialTable::Stencil stencil;
+    if (!table_.lookup_radius(u, v, r_q, stencil) || (inside_only && !(r_p < r_q))) {
       return false;
     }
+    const vec3 normal = RadialTable::normal(stencil);
     /* Q: same azimuth and height as P, at radius r_q. */
     const vec3 radial = r_p > 0.0f ? vec3(p_cyl.x, 0.0f, p_cyl.z) * (1.0f / r_p) :
                                      vec3(1.0f, 0.0f, 0.0f);
@@ -52,21 +74,6 @@ class CylinderMap {
     return true;
   }
 
-  /* Inside test and contact (Kurihara 1993 §3.1): true when P is inside, with eq. 11's
-   * nearest surface point T, depth |PT| along N and N. */
-  bool find_contact_map(const vec3 &p_cyl, MapSample &r_sample) const
-  {
-    /* Cheap rejections first: most hair nodes are far outside. */
-    if (p_cyl.x * p_cyl.x + p_cyl.z * p_cyl.z >= max_radius_sq_) {
-      return false;
-    }
-    return evaluate_map(p_cyl, r_sample) && r_sample.inside;
-  }
-
-  /* Object-space conveniences (not for the per-step path). */
-  bool evaluate(const vec3 &p_object, MapSample &r_sample) const;
-
- private:
   MapFrame frame_;
   mat4 object_to_map_{1.0f};
   RadialTable table_;

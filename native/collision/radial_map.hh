@@ -92,10 +92,16 @@ class RadialTable {
   float max_radius() const { return max_radius_; }
   void update_max_radius();
 
-  /* Bilinear look-up at table coordinates (u, v) (Kurihara 1993, eq. 8–10): the radius r_q
-   * and the interpolated, normalised normal N. False when any of the four cells is empty: a
-   * query never reports a collision next to a missed ray. */
-  bool lookup(const float u, const float v, float &r_radius, vec3 &r_normal) const
+  /* The four cells around table coordinates (u, v) and their bilinear weights. */
+  struct Stencil {
+    const MapCell *c00, *c10, *c01, *c11;
+    float w00, w10, w01, w11;
+  };
+
+  /* Bilinear look-up of the radius r_q at table coordinates (u, v) (Kurihara 1993, eq. 8–10).
+   * False when any of the four cells is empty: a query never reports a collision next to a
+   * missed ray. r_stencil is for normal(). */
+  bool lookup_radius(const float u, const float v, float &r_radius, Stencil &r_stencil) const
   {
     /* eq. 8: i <= u < i + 1, j <= v < j + 1. */
     const float u_floor = std::floor(u);
@@ -109,25 +115,35 @@ class RadialTable {
     /* eq. 10 */
     const float s = u - u_floor;
     const float t = v - v_floor;
-    const MapCell &c00 = cells_[size_t(j0 * u_num_ + i0)];
-    const MapCell &c10 = cells_[size_t(j0 * u_num_ + i1)];
-    const MapCell &c01 = cells_[size_t(j1 * u_num_ + i0)];
-    const MapCell &c11 = cells_[size_t(j1 * u_num_ + i1)];
-    if (std::min(std::min(c00.radius, c10.radius), std::min(c01.radius, c11.radius)) < 0.0f) {
+    Stencil &st = r_stencil;
+    st.c00 = &cells_[size_t(j0 * u_num_ + i0)];
+    st.c10 = &cells_[size_t(j0 * u_num_ + i1)];
+    st.c01 = &cells_[size_t(j1 * u_num_ + i0)];
+    st.c11 = &cells_[size_t(j1 * u_num_ + i1)];
+    if (std::min(std::min(st.c00->radius, st.c10->radius), std::min(st.c01->radius, st.c11->radius)) <
+        0.0f)
+    {
       return false;
     }
-    const float w00 = (1.0f - s) * (1.0f - t), w10 = s * (1.0f - t);
-    const float w01 = (1.0f - s) * t, w11 = s * t;
+    st.w00 = (1.0f - s) * (1.0f - t);
+    st.w10 = s * (1.0f - t);
+    st.w01 = (1.0f - s) * t;
+    st.w11 = s * t;
     /* eq. 9 */
-    r_radius = c00.radius * w00 + c10.radius * w10 + c01.radius * w01 + c11.radius * w11;
-    /* §3.1, step 1: N at Q by bilinear interpolation. */
-    const vec3 n = c00.normal * w00 + c10.normal * w10 + c01.normal * w01 + c11.normal * w11;
-    const float len_sq = glm::dot(n, n);
-    if (!(len_sq > 1e-12f)) {
-      return false;
-    }
-    r_normal = n * (1.0f / std::sqrt(len_sq));
+    r_radius = st.c00->radius * st.w00 + st.c10->radius * st.w10 + st.c01->radius * st.w01 +
+               st.c11->radius * st.w11;
     return true;
+  }
+
+  /* §3.1, step 1: N at Q by bilinear interpolation of the cells' normals, normalised. */
+  static vec3 normal(const Stencil &st)
+  {
+    const vec3 n = st.c00->normal * st.w00 + st.c10->normal * st.w10 + st.c01->normal * st.w01 +
+                   st.c11->normal * st.w11;
+    const float len_sq = glm::dot(n, n);
+    /* Opposite normals cancelling out (a thin sheet seen from both sides): any unit vector
+     * is as good, keep the first cell's. */
+    return len_sq > 1e-12f ? n * (1.0f / std::sqrt(len_sq)) : st.c00->normal;
   }
 
  private:

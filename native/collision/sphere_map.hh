@@ -26,6 +26,23 @@ class SphereMap {
   /* Signed depth at p (map space, relative to the centre) next to filled cells. */
   bool evaluate_map(const vec3 &p_sph, MapSample &r_sample) const
   {
+    return sample_map(p_sph, false, r_sample);
+  }
+
+  /* Inside test and eq. 11 contact, as CylinderMap::find_contact_map. */
+  bool find_contact_map(const vec3 &p_sph, MapSample &r_sample) const
+  {
+    if (glm::dot(p_sph, p_sph) >= max_radius_sq_) {
+      return false;
+    }
+    return sample_map(p_sph, true, r_sample);
+  }
+
+  bool evaluate(const vec3 &p_object, MapSample &r_sample) const;
+
+ private:
+  bool sample_map(const vec3 &p_sph, const bool inside_only, MapSample &r_sample) const
+  {
     const float rho_xz_sq = p_sph.x * p_sph.x + p_sph.z * p_sph.z;
     const float rho_xz = std::sqrt(rho_xz_sq);
     const float r_p = std::sqrt(rho_xz_sq + p_sph.y * p_sph.y);
@@ -35,18 +52,25 @@ class SphereMap {
     const float v_last = float(table_.v_num() - 1);
     const float v = phi * v_per_radian_ - 0.5f;
     float r_q;
-    vec3 normal;
-    if (!table_.lookup(u, std::min(std::max(v, 0.0f), v_last), r_q, normal)) {
+    RadialTable::Stencil stencil;
+    if (!table_.lookup_radius(u, std::min(std::max(v, 0.0f), v_last), r_q, stencil)) {
       return false;
     }
-    if (v < 0.0f || v > v_last) {
-      /* Between the first (last) row and the pole: w = 1 at the pole. */
-      const MapCell &pole = v < 0.0f ? north_ : south_;
+    /* Between the first (last) row and the pole: w = 1 at the pole. */
+    const bool near_pole = v < 0.0f || v > v_last;
+    const MapCell &pole = v < 0.0f ? north_ : south_;
+    const float w = v < 0.0f ? -2.0f * v : 2.0f * (v - v_last);
+    if (near_pole) {
       if (pole.radius < 0.0f) {
         return false;
       }
-      const float w = v < 0.0f ? -2.0f * v : 2.0f * (v - v_last);
       r_q += w * (pole.radius - r_q);
+    }
+    if (inside_only && !(r_p < r_q)) {
+      return false;
+    }
+    vec3 normal = RadialTable::normal(stencil);
+    if (near_pole) {
       normal = glm::normalize(normal + w * (pole.normal - normal));
     }
     /* Q: same direction from the centre as P, at radius r_q. */
@@ -55,18 +79,6 @@ class SphereMap {
     return true;
   }
 
-  /* Inside test and eq. 11 contact, as CylinderMap::find_contact_map. */
-  bool find_contact_map(const vec3 &p_sph, MapSample &r_sample) const
-  {
-    if (glm::dot(p_sph, p_sph) >= max_radius_sq_) {
-      return false;
-    }
-    return evaluate_map(p_sph, r_sample) && r_sample.inside;
-  }
-
-  bool evaluate(const vec3 &p_object, MapSample &r_sample) const;
-
- private:
   MapFrame frame_;
   mat4 object_to_map_{1.0f};
   RadialTable table_;
