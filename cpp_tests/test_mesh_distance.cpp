@@ -1,0 +1,181 @@
+/* Triangle BVH queries against brute force, and exact signed distance on analytic shapes. */
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "collision/bvh.hh"
+#include "collision/mesh_distance.hh"
+#include "collision_test_shapes.hh"
+
+using namespace hairdyn;
+using namespace hairdyn::test;
+
+namespace {
+
+/* A bumpy sphere plus a cloud of random triangles: no structure a BVH bug could hide behind. */
+TestMesh random_mesh()
+{
+  TestMesh m = uv_sphere(1.0f, 24, 12);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> bump(0.8f, 1.2f), c(-2.0f, 2.0f), d(-0.3f, 0.3f);
+  for (vec3 &v : m.vertices) {
+    v *= bump(rng);
+  }
+  for (int i = 0; i < 300; i++) {
+    const vec3 a(c(rng), c(rng), c(rng));
+    const int base = int(m.vertices.size());
+    m.vertices.push_back(a);
+    m.vertices.push_back(a + vec3(d(rng), d(rng), d(rng)));
+    m.vertices.push_back(a + vec3(d(rng), d(rng), d(rng)));
+    m.triangles.emplace_back(base, base + 1, base + 2);
+  }
+  return m;
+}
+
+float box_sdf(const vec3 &p, const vec3 &h)
+{
+  const vec3 q = glm::abs(p) - h;
+  return glm::length(glm::max(q, vec3(0.0f))) + std::min(std::max(q.x, std::max(q.y, q.z)), 0.0f);
+}
+
+}  // namespace
+
+TEST(TriangleBVH, ClosestPointMatchesBruteForce)
+{
+  const TestMesh m = random_mesh();
+  const TriangleBVH bvh(m.vertices, m.triangles);
+  ASSERT_EQ(bvh.triangles_num(), int64_t(m.triangles.size()));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> c(-3.0f, 3.0f);
+  for (int i = 0; i < 2000; i++) {
+    const vec3 p(c(rng), c(rng), c(rng));
+    float best = std::numeric_limits<float>::max();
+    for (const ivec3 &t : m.triangles) {
+      best = std::min(best, closest_point_on_triangle(p, m.vertices[size_t(t.x)], m.vertices[size_t(t.y)],
+                                                       m.vertices[size_t(t.z)]).distance_sq);
+    }
+    const ClosestPoint cp = bvh.closest_point(p);
+    ASSERT_NEAR(cp.distance_sq, best, 1e-5f * (1.0f + best)) << "point " << i;
+    ASSERT_NEAR(glm::dot(cp.point - p, cp.point - p), cp.distance_sq, 1e-4f);
+  }
+}
+
+TEST(TriangleBVH, ClosestPointOnTriangleRegions)
+{
+  const vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  ClosestPoint cp = closest_point_on_triangle(vec3(0.2f, 0.2f, 1.0f), a, b, c);
+  EXPECT_EQ(cp.feature, TriangleFeature::Face);
+  EXPECT_NEAR(cp.distance_sq, 1.0f, 1e-6f);
+  cp = closest_point_on_triangle(vec3(-1, -1, 0), a, b, c);
+  EXPECT_EQ(cp.feature, TriangleFeature::Vertex);
+  EXPECT_EQ(cp.feature_index, 0);
+  cp = closest_point_on_triangle(vec3(1, 1, 0), a, b, c);
+  EXPECT_EQ(cp.feature, TriangleFeature::Edge);
+  EXPECT_EQ(cp.feature_index, 1);
+  EXPECT_NEAR(glm::length(cp.point - vec3(0.5f, 0.5f, 0)), 0.0f, 1e-6f);
+  cp = closest_point_on_triangle(vec3(-1, 0.5f, 0), a, b, c);
+  EXPECT_EQ(cp.feature, TriangleFeature::Edge);
+  EXPECT_EQ(cp.feature_index, 2);
+}
+
+TEST(TriangleBVH, RayHitsMatchBruteForce)
+{
+  const TestMesh m = random_mesh();
+  const TriangleBVH bvh(m.vertices, m.triangles);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> c(-2.5f, 2.5f);
+  std::vector<RayHit> hits;
+  int64_t total = 0;
+  for (int i = 0; i < 1000; i++) {
+    const vec3 origin(c(rng), c(rng), c(rng));
+    const vec3 direction = glm::normalize(vec3(c(rng), c(rng), c(rng)));
+    std::vector<float> expected;
+    for (const ivec3 &t : m.triangles) {
+      RayHit hit;
+      if (intersect_ray_triangle(origin, direction, m.vertices[size_t(t.x)], m.vertices[size_t(t.y)],
+                                 m.vertices[size_t(t.z)], hit)) {
+        expected.push_back(hit.t);
+      }
+    }
+    std::sort(expected.begin(), expected.end());
+    bvh.ray_hits(origin, direction, 1e30f, hits);
+    ASSERT_EQ(hits.size(), expected.size()) << "ray " << i;
+    for (size_t k = 0; k < hits.size(); k++) {
+      EXPECT_FLOAT_EQ(hits[k].t, expected[k]);
+    }
+    RayHit farthest;
+    ASSERT_EQ(bvh.ray_farthest_hit(origin, direction, farthest), !expected.empty());
+    if (!expected.empty()) {
+      EXPECT_FLOAT_EQ(farthest.t, expected.back());
+    }
+    total += int64_t(expected.size());
+  }
+  EXPECT_GT(total, 200);
+}
+
+TEST(MeshDistance, SignedDistanceOnABoxIsExact)
+{
+  /* Twelve triangles describe the box exactly, so the only error is rounding; points near
+   * edges and corners test the edge and vertex pseudo-normals. */
+  const vec3 h(1.0f, 0.5f, 2.0f);
+  const TestMesh m = box(h);
+  const MeshDistance distance(m.vertices, m.triangles);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> c(-2.5f, 2.5f);
+  for (int i = 0; i < 5000; i++) {
+    const vec3 p(c(rng), c(rng), c(rng));
+    ASSERT_NEAR(distance.signed_distance(p), box_sdf(p, h), 1e-5f) << p.x << " " << p.y << " " << p.z;
+  }
+  /* Just outside a corner and an edge, just inside a face. */
+  EXPECT_GT(distance.signed_distance(h + vec3(1e-3f)), 0.0f);
+  EXPECT_GT(distance.signed_distance(vec3(h.x + 1e-3f, h.y + 1e-3f, 0.0f)), 0.0f);
+  EXPECT_NEAR(distance.signed_distance(vec3(0.0f, 0.4f, 0.0f)), -0.1f, 1e-6f);
+  EXPECT_NEAR(distance.depth(vec3(0.0f, 0.4f, 0.0f)), 0.1f, 1e-6f);
+  EXPECT_EQ(distance.depth(vec3(5.0f, 0.0f, 0.0f)), 0.0f);
+}
+
+TEST(MeshDistance, SignedDistanceOnASphere)
+{
+  const float radius = 2.0f;
+  const TestMesh m = uv_sphere(radius, 128, 64);
+  const MeshDistance distance(m.vertices, m.triangles);
+  /* Faceting error: the sagitta of a cell, R (1 - cos(π / 64)). */
+  const float facet = radius * (1.0f - std::cos(float(M_PI) / 64.0f)) * 2.0f;
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> c(-3.0f, 3.0f);
+  for (int i = 0; i < 3000; i++) {
+    const vec3 p(c(rng), c(rng), c(rng));
+    const float exact = glm::length(p) - radius;
+    const float sd = distance.signed_distance(p);
+    ASSERT_NEAR(sd, exact, facet) << i;
+    if (std::abs(exact) > facet) {
+      ASSERT_EQ(sd < 0.0f, exact < 0.0f);
+    }
+  }
+}
+
+TEST(MeshDistance, PenetrationStats)
+{
+  const vec3 h(1.0f);
+  const TestMesh m = box(h);
+  const MeshDistance distance(m.vertices, m.triangles);
+  /* Depths 0.5, 0.05, 0 (outside), 1 (the centre). */
+  const std::vector<vec3> points{{0.5f, 0, 0}, {0, 0.95f, 0}, {3, 0, 0}, {0, 0, 0}};
+  PenetrationStats stats = penetration_stats(distance, mat4(1.0f), points, 0.1f);
+  EXPECT_NEAR(stats.max_depth, 1.0f, 1e-6f);
+  EXPECT_EQ(stats.deeper_num, 2);
+  EXPECT_EQ(stats.points_num, 4);
+  EXPECT_FLOAT_EQ(stats.share, 0.5f);
+  /* The box moved and scaled by 3: world depths scale, points follow the transform. */
+  const mat4 m_wo = glm::translate(mat4(1.0f), vec3(10, 0, 0)) * glm::scale(mat4(1.0f), vec3(3.0f));
+  std::vector<vec3> moved;
+  for (const vec3 &p : points) {
+    moved.push_back(transform_point(m_wo, p));
+  }
+  stats = penetration_stats(distance, m_wo, moved, 0.1f);
+  EXPECT_NEAR(stats.max_depth, 3.0f, 1e-5f);
+  EXPECT_EQ(stats.deeper_num, 3);
+  EXPECT_NEAR(uniform_scale(m_wo), 3.0f, 1e-6f);
+  stats = penetration_stats(distance, mat4(1.0f), Span<vec3>(), 0.1f);
+  EXPECT_EQ(stats.share, 0.0f);
+}

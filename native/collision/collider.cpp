@@ -1,0 +1,283 @@
+#include "collision/collider.hh"
+
+#include <algorithm>
+#include <chrono>
+#include <sstream>
+
+#include "core/parallel.hh"
+
+namespace hairdyn {
+
+std::vector<vec3> error_sample_points(const Span<vec3> vertices, const Span<ivec3> triangles,
+                                      const float offset, const int64_t max_points_num)
+{
+  std::vector<vec3> points;
+  const int64_t stride = std::max<int64_t>(1, (2 * triangles.size() + max_points_num - 1) /
+                                                  std::max<int64_t>(max_points_num, 1));
+  for (int64_t t = 0; t < triangles.size(); t += stride) {
+    const ivec3 tri = triangles[t];
+    const vec3 a = vertices[tri.x], b = vertices[tri.y], c = vertices[tri.z];
+    const vec3 n = glm::cross(b - a, c - a);
+    const float len = glm::length(n);
+    if (!(len > 0.0f)) {
+      continue;
+    }
+    const vec3 centroid = (a + b + c) / 3.0f;
+    points.push_back(centroid + n * (offset / len));
+    points.push_back(centroid - n * (offset / len));
+  }
+  return points;
+}
+
+std::string find_collider_error(const ColliderMesh &mesh, const Span<int32_t> part_offsets,
+                                const Span<int32_t> part_vertices, const int64_t part_frames_num)
+{
+  std::ostringstream msg;
+  if (mesh.triangles_num() == 0) {
+    return "the collider mesh has no usable faces";
+  }
+  if (part_offsets.is_empty()) {
+    if (!part_vertices.is_empty()) {
+      return "part vertices were given without part offsets";
+    }
+    if (part_frames_num > 1) {
+      return "one map frame is needed for the whole mesh, not " + std::to_string(part_frames_num);
+    }
+    return {};
+  }
+  const int64_t parts_num = part_offsets.size() - 1;
+  if (parts_num < 1 || part_offsets[0] != 0 || part_offsets.last() != part_vertices.size()) {
+    msg << "part offsets must start at 0 and end at the number of part vertices ("
+        << part_vertices.size() << ")";
+    return msg.str();
+  }
+  if (part_frames_num != 0 && part_frames_num != parts_num) {
+    msg << "there are " << parts_num << " parts but " << part_frames_num << " map frames";
+    return msg.str();
+  }
+  std::vector<uint8_t> in_part(size_t(mesh.vertices_num()));
+  for (int64_t p = 0; p < parts_num; p++) {
+    if (part_offsets[p + 1] < part_offsets[p]) {
+      msg << "part offsets must not decrease (part " << p << ")";
+      return msg.str();
+    }
+    if (part_offsets[p + 1] == part_offsets[p]) {
+      msg << "part " << p << " has no vertices";
+      return msg.str();
+    }
+    std::fill(in_part.begin(), in_part.end(), 0);
+    for (int32_t i = part_offsets[p]; i < part_offsets[p + 1]; i++) {
+      const int32_t v = part_vertices[i];
+      if (v < 0 || v >= mesh.vertices_num()) {
+        msg << "part " << p << " uses vertex " << v << " but the mesh has " << mesh.vertices_num()
+            << " vertices";
+        return msg.str();
+      }
+      in_part[size_t(v)] = 1;
+    }
+    bool has_triangle = false;
+    for (const auto face : mesh.mesh().faces()) {
+      bool all = true;
+      for (const auto vertex : mesh.mesh().fv_range(face)) {
+        all = all && in_part[size_t(vertex.idx())];
+      }
+      if (all) {
+        has_triangle = true;
+        break;
+      }
+    }
+    if (!has_triangle) {
+      msg << "part " << p << " selects no triangle (a triangle needs all three of its vertices in the part)";
+      return msg.str();
+    }
+  }
+  return {};
+}
+
+Collider::Collider(const ColliderMesh &mesh, const Span<int32_t> part_offsets,
+                   const Span<int32_t> part_vertices, const CollisionParams &params,
+                   const Span<MapFrame> part_frames)
+    : params_(params),
+      boundary_edges_num_(mesh.boundary_edges_num()),
+      skipped_triangles_num_(mesh.skipped_triangles_num())
+{
+  assert(find_collider_error(mesh, part_offsets, part_vertices, part_frames.size()).empty());
+  const auto start = std::chrono::steady_clock::now();
+  const TriMesh &trimesh = mesh.mesh();
+  vertices_.reserve(trimesh.n_vertices());
+  for (const auto vertex : trimesh.vertices()) {
+    const TriMesh::Point &p = trimesh.point(vertex);
+    vertices_.emplace_back(p[0], p[1], p[2]);
+  }
+  triangles_.reserve(trimesh.n_faces());
+  for (const auto face : trimesh.faces()) {
+    ivec3 tri;
+    int k = 0;
+    for (const auto vertex : trimesh.fv_range(face)) {
+      tri[k++] = vertex.idx();
+    }
+    triangles_.push_back(tri);
+  }
+
+  const int64_t parts_num = part_offsets.is_empty() ? 1 : part_offsets.size() - 1;
+  parts_.resize(size_t(parts_num));
+  std::vector<uint8_t> in_part(vertices_.size());
+  for (int64_t p = 0; p < parts_num; p++) {
+    Part &part = parts_[size_t(p)];
+    if (part_offsets.is_empty()) {
+      part.triangles = triangles_;
+    }
+    else {
+      std::fill(in_part.begin(), in_part.end(), 0);
+      for (int32_t i = part_offsets[p]; i < part_offsets[p + 1]; i++) {
+        in_part[size_t(part_vertices[i])] = 1;
+      }
+      for (const ivec3 &tri : triangles_) {
+        if (in_part[size_t(tri.x)] && in_part[size_t(tri.y)] && in_part[size_t(tri.z)]) {
+          part.triangles.push_back(tri);
+        }
+      }
+    }
+    if (!part_frames.is_empty()) {
+      part.explicit_frame = true;
+      part.frame = make_frame(part_frames[p].origin, part_frames[p].axis, part_frames[p].reference);
+    }
+  }
+  for (Part &part : parts_) {
+    build_part(part, true);
+  }
+  exact_ = MeshDistance(vertices_, triangles_);
+  size_ = glm::length(exact_.bvh().bounds_max() - exact_.bvh().bounds_min());
+  set_transform(object_to_world_);
+  build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+MapFrame Collider::part_frame(const Part &part) const
+{
+  if (part.explicit_frame) {
+    return part.frame;
+  }
+  const MapFrame fitted = fit_frame(vertices_, part.triangles);
+  switch (params_.axis_mode) {
+    case AxisMode::ObjectX:
+      return make_frame(fitted.origin, vec3(1, 0, 0), vec3(0, 1, 0));
+    case AxisMode::ObjectY:
+      return make_frame(fitted.origin, vec3(0, 1, 0), vec3(0, 0, 1));
+    case AxisMode::ObjectZ:
+      return make_frame(fitted.origin, vec3(0, 0, 1), vec3(1, 0, 0));
+    case AxisMode::Fitted:
+    default:
+      return fitted;
+  }
+}
+
+void Collider::build_part(Part &part, const bool choose_kind)
+{
+  part.frame = part_frame(part);
+  const TriangleBVH bvh(vertices_, part.triangles);
+  const int32_t m = params_.azimuth_num, n = params_.height_num;
+  const MapKind kind = choose_kind ? params_.map_kind : part.map.kind;
+  part.map = PartMap{};
+  if (kind == MapKind::Cylinder || kind == MapKind::Auto) {
+    part.map.cylinder = CylinderMap(bvh, vertices_, part.triangles, part.frame, m, n);
+  }
+  if (kind == MapKind::Sphere || kind == MapKind::Auto) {
+    part.map.sphere = SphereMap(bvh, vertices_, part.triangles, part.frame, m, n);
+  }
+  if (kind != MapKind::Auto) {
+    part.map.kind = kind;
+    return;
+  }
+  /* Automatic choice: the map with the smaller mean depth error against the exact part
+   * surface, measured 2% of the part's size inside and outside its triangles. */
+  const MeshDistance exact(vertices_, part.triangles);
+  const float part_size = glm::length(bvh.bounds_max() - bvh.bounds_min());
+  const std::vector<vec3> points = error_sample_points(vertices_, part.triangles,
+                                                       0.02f * part_size, 2000);
+  part.cylinder_error = mean_depth_error(part.map.cylinder, exact, points);
+  part.sphere_error = mean_depth_error(part.map.sphere, exact, points);
+  if (part.sphere_error < part.cylinder_error) {
+    part.map.kind = MapKind::Sphere;
+    part.map.cylinder = CylinderMap();
+  }
+  else {
+    part.map.kind = MapKind::Cylinder;
+    part.map.sphere = SphereMap();
+  }
+}
+
+void Collider::rebuild(const Span<vec3> vertices_object)
+{
+  assert(vertices_object.size() == int64_t(vertices_.size()));
+  const auto start = std::chrono::steady_clock::now();
+  std::copy(vertices_object.begin(), vertices_object.end(), vertices_.begin());
+  for (Part &part : parts_) {
+    build_part(part, false);
+  }
+  exact_ = MeshDistance(vertices_, triangles_);
+  size_ = glm::length(exact_.bvh().bounds_max() - exact_.bvh().bounds_min());
+  set_transform(object_to_world_);
+  build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void Collider::set_transform(const mat4 &object_to_world)
+{
+  object_to_world_ = object_to_world;
+  const mat4 world_to_object = glm::inverse(object_to_world);
+  /* Similarity test: the columns of the linear part are orthogonal and of equal length. */
+  const mat3 linear(object_to_world);
+  const mat3 gram = glm::transpose(linear) * linear;
+  const float scale_sq = (gram[0][0] + gram[1][1] + gram[2][2]) / 3.0f;
+  float off = 0.0f;
+  for (int i = 0; i < 3; i++) {
+    for (int j = 0; j < 3; j++) {
+      off = std::max(off, std::abs(gram[i][j] - (i == j ? scale_sq : 0.0f)));
+    }
+  }
+  similarity_scale_ = scale_sq > 0.0f && off <= 1e-5f * scale_sq ? std::sqrt(scale_sq) : 0.0f;
+  for (Part &part : parts_) {
+    const MapFrame &frame = part.map.frame();
+    const mat4 map_to_world = object_to_world * frame.map_to_object();
+    part.world_to_map = Affine::from(frame.object_to_map() * world_to_object);
+    part.map_to_world = Affine::from(map_to_world);
+    part.normal_to_world = glm::transpose(glm::inverse(mat3(map_to_world)));
+  }
+}
+
+float ColliderSet::size_wo() const
+{
+  float size = 0.0f;
+  for (size_t i = 0; i < colliders_.size(); i++) {
+    size = i == 0 ? colliders_[i]->size_wo() : std::min(size, colliders_[i]->size_wo());
+  }
+  return size;
+}
+
+PenetrationStats ColliderSet::penetration_stats(const Span<vec3> points_wo,
+                                                const float tolerance_wo) const
+{
+  std::vector<float> depths(size_t(points_wo.size()), 0.0f);
+  for (const std::shared_ptr<Collider> &collider : colliders_) {
+    accumulate_penetration_depths(collider->exact(), collider->object_to_world(), points_wo,
+                                  depths);
+  }
+  return hairdyn::penetration_stats(depths, tolerance_wo);
+}
+
+void find_contacts(const ColliderSet &colliders, const Span<vec3> points_wo,
+                   const MutableSpan<uint8_t> r_hit, const MutableSpan<float> r_depth,
+                   const MutableSpan<vec3> r_normal_wo, const MutableSpan<vec3> r_surface_point_wo)
+{
+  parallel_for(points_wo.size(), 4096, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      Contact contact;
+      const bool hit = colliders.find_contact(points_wo[i], contact);
+      r_hit[i] = hit ? 1 : 0;
+      r_depth[i] = hit ? contact.depth : 0.0f;
+      r_normal_wo[i] = hit ? contact.normal_wo : vec3(0.0f);
+      r_surface_point_wo[i] = hit ? contact.surface_point_wo : points_wo[i];
+    }
+  });
+}
+
+}  // namespace hairdyn

@@ -1,0 +1,141 @@
+#include "collision/mesh_distance.hh"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.hh"
+
+namespace hairdyn {
+
+MeshDistance::MeshDistance(const Span<vec3> vertices, const Span<ivec3> triangles)
+    : bvh_(vertices, triangles)
+{
+  const size_t tris_num = size_t(triangles.size());
+  face_normals_.resize(tris_num);
+  edge_normals_.assign(tris_num * 3, vec3(0.0f));
+  vertex_normals_.resize(tris_num * 3);
+  std::vector<vec3> vertex_sum(size_t(vertices.size()), vec3(0.0f));
+  for (size_t t = 0; t < tris_num; t++) {
+    const ivec3 tri = triangles[int64_t(t)];
+    const vec3 n = glm::cross(vertices[tri.y] - vertices[tri.x], vertices[tri.z] - vertices[tri.x]);
+    const float len = glm::length(n);
+    face_normals_[t] = len > 0.0f ? n / len : vec3(0.0f);
+    /* Angle-weighted vertex pseudo-normals. */
+    for (int k = 0; k < 3; k++) {
+      const vec3 a = vertices[tri[k]];
+      const vec3 e1 = vertices[tri[(k + 1) % 3]] - a, e2 = vertices[tri[(k + 2) % 3]] - a;
+      const float l1 = glm::length(e1), l2 = glm::length(e2);
+      if (l1 > 0.0f && l2 > 0.0f) {
+        const float angle = std::acos(std::clamp(glm::dot(e1, e2) / (l1 * l2), -1.0f, 1.0f));
+        vertex_sum[size_t(tri[k])] += angle * face_normals_[t];
+      }
+    }
+  }
+  /* Edge pseudo-normals: the sum of the normals of the faces on the edge, found by sorting
+   * the (smaller vertex, larger vertex) keys of all triangle edges. */
+  struct EdgeKey {
+    uint64_t key;
+    uint32_t corner;
+  };
+  std::vector<EdgeKey> keys(tris_num * 3);
+  for (size_t t = 0; t < tris_num; t++) {
+    const ivec3 tri = triangles[int64_t(t)];
+    for (int k = 0; k < 3; k++) {
+      const uint32_t a = uint32_t(tri[k]), b = uint32_t(tri[(k + 1) % 3]);
+      keys[t * 3 + size_t(k)] = {(uint64_t(std::min(a, b)) << 32) | std::max(a, b),
+                                 uint32_t(t * 3 + size_t(k))};
+    }
+  }
+  std::sort(keys.begin(), keys.end(), [](const EdgeKey &x, const EdgeKey &y) {
+    return x.key < y.key || (x.key == y.key && x.corner < y.corner);
+  });
+  for (size_t begin = 0; begin < keys.size();) {
+    size_t end = begin;
+    vec3 sum(0.0f);
+    for (; end < keys.size() && keys[end].key == keys[begin].key; end++) {
+      sum += face_normals_[keys[end].corner / 3];
+    }
+    for (size_t e = begin; e < end; e++) {
+      edge_normals_[keys[e].corner] = sum;
+    }
+    begin = end;
+  }
+  for (size_t t = 0; t < tris_num; t++) {
+    const ivec3 tri = triangles[int64_t(t)];
+    for (int k = 0; k < 3; k++) {
+      vertex_normals_[t * 3 + size_t(k)] = vertex_sum[size_t(tri[k])];
+    }
+  }
+}
+
+float MeshDistance::signed_distance(const vec3 &p) const
+{
+  const ClosestPoint cp = bvh_.closest_point(p);
+  const size_t t = size_t(cp.triangle);
+  vec3 pseudo_normal;
+  switch (cp.feature) {
+    case TriangleFeature::Face:
+      pseudo_normal = face_normals_[t];
+      break;
+    case TriangleFeature::Edge:
+      pseudo_normal = edge_normals_[t * 3 + size_t(cp.feature_index)];
+      break;
+    case TriangleFeature::Vertex:
+    default:
+      pseudo_normal = vertex_normals_[t * 3 + size_t(cp.feature_index)];
+      break;
+  }
+  const float distance = std::sqrt(cp.distance_sq);
+  return glm::dot(p - cp.point, pseudo_normal) < 0.0f ? -distance : distance;
+}
+
+float MeshDistance::depth(const vec3 &p) const
+{
+  const vec3 lo = bvh_.bounds_min(), hi = bvh_.bounds_max();
+  if (p.x < lo.x || p.y < lo.y || p.z < lo.z || p.x > hi.x || p.y > hi.y || p.z > hi.z) {
+    return 0.0f;
+  }
+  return std::max(-signed_distance(p), 0.0f);
+}
+
+float uniform_scale(const mat4 &m)
+{
+  return std::cbrt(std::abs(glm::determinant(mat3(m))));
+}
+
+void accumulate_penetration_depths(const MeshDistance &mesh, const mat4 &object_to_world,
+                                   const Span<vec3> points_wo, const MutableSpan<float> r_depth_wo)
+{
+  assert(points_wo.size() == r_depth_wo.size());
+  const mat4 world_to_object = glm::inverse(object_to_world);
+  const float scale = uniform_scale(object_to_world);
+  parallel_for(points_wo.size(), 256, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      const float depth = mesh.depth(transform_point(world_to_object, points_wo[i])) * scale;
+      r_depth_wo[i] = std::max(r_depth_wo[i], depth);
+    }
+  });
+}
+
+PenetrationStats penetration_stats(const Span<float> depths_wo, const float tolerance_wo)
+{
+  PenetrationStats stats;
+  stats.points_num = depths_wo.size();
+  for (const float depth : depths_wo) {
+    stats.max_depth = std::max(stats.max_depth, depth);
+    stats.deeper_num += depth > tolerance_wo ? 1 : 0;
+  }
+  stats.share = stats.points_num > 0 ? float(double(stats.deeper_num) / double(stats.points_num)) :
+                                       0.0f;
+  return stats;
+}
+
+PenetrationStats penetration_stats(const MeshDistance &mesh, const mat4 &object_to_world,
+                                   const Span<vec3> points_wo, const float tolerance_wo)
+{
+  std::vector<float> depths(size_t(points_wo.size()), 0.0f);
+  accumulate_penetration_depths(mesh, object_to_world, points_wo, depths);
+  return penetration_stats(depths, tolerance_wo);
+}
+
+}  // namespace hairdyn
