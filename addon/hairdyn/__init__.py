@@ -25,6 +25,8 @@ from . import (errors, native, cache, hair_formats, properties, bridge, playback
                simulation, operators, io_import, ui)
 
 classes = (
+    properties.HairdynCollisionSettings,
+    properties.HairdynColliderItem,
     properties.HairdynSettings,
     operators.HAIRDYN_OT_simulate,
     operators.HAIRDYN_OT_bake,

@@ -4,7 +4,8 @@ Solver parameter groups mirror the native parameter structs field for field; a t
 them against hairdyn._native's `fields()` tables so the panel and the solver cannot drift.
 """
 import bpy
-from bpy.props import BoolProperty, EnumProperty, IntProperty, PointerProperty, StringProperty
+from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
+                       IntProperty, PointerProperty, StringProperty)
 
 METHODS = (
     ("FOLLOW", "Follow Head",
@@ -15,6 +16,71 @@ METHODS = (
 
 def _is_mesh(_self, obj):
     return obj.type == 'MESH'
+
+
+def native_params(group, params_class):
+    """A native parameter struct (e.g. _native.CollisionParams) from its mirror PropertyGroup:
+    field for field, enums by their position in the native `choices`."""
+    values = {}
+    for field in params_class.fields():
+        value = getattr(group, field["name"])
+        if field["choices"]:
+            value = field["choices"].split(",").index(value.lower())
+        elif not isinstance(value, (bool, int, float)):
+            value = tuple(value)
+        values[field["name"]] = value
+    return params_class(**values)
+
+
+class HairdynCollisionSettings(bpy.types.PropertyGroup):
+    """Mirrors native CollisionParams (native/collision/collision_params.hh) field for field."""
+
+    azimuth_num: IntProperty(
+        name="Map Columns (m)", default=40, min=4, max=4096,
+        description="m: azimuth samples of each collision map (Kurihara 1993, eq. 8; the "
+                    "paper uses 40)")
+    height_num: IntProperty(
+        name="Map Rows (n)", default=40, min=4, max=4096,
+        description="n: height (cylinder) or polar (sphere) samples of each collision map "
+                    "(Kurihara 1993, eq. 8; the paper uses 40)")
+    map_kind: EnumProperty(
+        name="Map", default='AUTO',
+        items=(('AUTO', "Automatic", "Per part, the map with the smaller error against the mesh"),
+               ('CYLINDER', "Cylinder", "Cylindrical map (r, θ, y), Kurihara 1993 §3.1"),
+               ('SPHERE', "Sphere", "Spherical map (r, θ, φ), Kurihara 1993 §5")),
+        description="Map per collider part")
+    axis_mode: EnumProperty(
+        name="Axis", default='FITTED',
+        items=(('FITTED', "Fitted", "Principal axis of the part's surface"),
+               ('OBJECT_X', "Object X", "The collider's local X axis through the part's centre"),
+               ('OBJECT_Y', "Object Y", "The collider's local Y axis through the part's centre"),
+               ('OBJECT_Z', "Object Z", "The collider's local Z axis through the part's centre")),
+        description="Where each part's map axis comes from")
+    stiffness: FloatProperty(
+        name="Stiffness (k)", default=1.0e4, min=0.0, max=1.0e9, soft_max=1.0e6,
+        description="k, 1/s²: strength of the reaction constraint pulling a node to the surface "
+                    "(Kurihara 1993, eq. 13)")
+    damping: FloatProperty(
+        name="Damping (c)", default=0.0, min=0.0, max=1.0e6, soft_max=1000.0,
+        description="c, 1/s: damping of the normal velocity in the reaction constraint; 0 uses "
+                    "the paper's c = √(2k) (Kurihara 1993, eq. 13)")
+    friction: FloatProperty(
+        name="Friction (μ)", default=0.0, min=0.0, max=10.0, soft_max=2.0,
+        description="μ: Coulomb friction against colliders; 0 reproduces Kurihara 1993 (an "
+                    "extension of eq. 14)")
+    projection_tolerance: FloatProperty(
+        name="Projection Tolerance", default=0.001, min=0.0, max=1.0, precision=4,
+        description="Nodes deeper than this share of the collider's size (bounding-box "
+                    "diagonal) are put back on the surface (Ward & Lin 2003 §5.5)")
+    penetration_tolerance: FloatProperty(
+        name="Report Tolerance", default=0.01, min=0.0, max=1.0, precision=4,
+        description="Depth, as a share of the collider's size (bounding-box diagonal), counted "
+                    "as penetration in the quality report")
+
+
+class HairdynColliderItem(bpy.types.PropertyGroup):
+    object: PointerProperty(name="Collider", type=bpy.types.Object, poll=_is_mesh,
+                            description="A mesh the hair collides with")
 
 
 class HairdynSettings(bpy.types.PropertyGroup):
@@ -29,6 +95,22 @@ class HairdynSettings(bpy.types.PropertyGroup):
         name="Head", type=bpy.types.Object, poll=_is_mesh,
         description="Mesh the hair roots are attached to. Empty: the Curves object's surface, "
                     "or the mesh that emits the particle hair")
+    use_collision: BoolProperty(
+        name="Collision", default=True,
+        description="Collide the hair with the head and the other colliders (cylindrical and "
+                    "spherical maps, Kurihara 1993 §3)")
+    use_default_colliders: BoolProperty(
+        name="Default Colliders", default=True,
+        description="Collide with the head, and with every mesh that has Blender's Collision "
+                    "modifier")
+    colliders: CollectionProperty(type=HairdynColliderItem, name="Colliders",
+                                  description="More meshes the hair collides with")
+    collider_index: IntProperty(name="Active Collider", default=0, min=0)
+    collider_parts: StringProperty(
+        name="Parts", default="head,neck,torso,arms,arm.L,arm.R",
+        description="Vertex groups that get a map of their own (comma separated): head, neck, "
+                    "torso... A collider with none of them is one part")
+    collision: PointerProperty(type=HairdynCollisionSettings, name="Collision Settings")
     frame_start: IntProperty(
         name="Start", default=1, min=-1048574, max=1048574,
         description="First frame of the simulation: the groom's rest shape is read here")
@@ -59,12 +141,20 @@ class HairdynSettings(bpy.types.PropertyGroup):
 def settings_dict(settings):
     """The solver parameters of a settings group as plain values (for a cache manifest):
     every property but object pointers and the cache's own settings."""
-    skip = {"rna_type", "name", "enabled", "head", "output_curves", "output_points", "cache_directory",
+    skip = {"rna_type", "name", "enabled", "head", "collider_index", "output_curves", "output_points", "cache_directory",
             "use_cache", "use_live"}
     result = {}
     for prop in settings.bl_rna.properties:
-        if prop.identifier in skip or prop.type == 'POINTER':
+        if prop.identifier in skip:
             continue
         value = getattr(settings, prop.identifier)
-        result[prop.identifier] = list(value) if hasattr(value, "__len__") and not isinstance(value, str) else value
+        if prop.type == 'POINTER':
+            if isinstance(value, bpy.types.PropertyGroup):
+                result[prop.identifier] = settings_dict(value)
+        elif prop.type == 'COLLECTION':
+            result[prop.identifier] = [item.object.name for item in value if item.object]
+        elif hasattr(value, "__len__") and not isinstance(value, str):
+            result[prop.identifier] = list(value)
+        else:
+            result[prop.identifier] = value
     return result
