@@ -1,52 +1,50 @@
 #pragma once
-/* One time step of a hinge angle q (θ or φ) with angular velocity ω under
+/* One time step of a hinge angle q (θ or φ, measured from rest) with angular velocity ω under
  *
- *   I q̈ + γ q̇ = M_ext − k q                  (Kurihara 1993, eq. 1 and 4; q measured from rest)
+ *   I q̈ + γ q̇ = M − k q                  (Kurihara 1993, eq. 1 and 4)
  *
- * External torques are always explicit; the integrator decides how the spring and the damping
- * are treated. Both return the new ω and advance q by h ω_new. */
+ * Both integrators take the form
+ *
+ *   ω ← ω + h g (M − k q − c ω),   q ← q + h ω
+ *
+ * with the external torque M always explicit:
+ *
+ * Explicit, Kurihara 1993, eq. 7: q^{n+1} − 2q^n + q^{n−1} + (γ h / I)(q^n − q^{n−1}) = h² M / I.
+ *   With ω^{n+1/2} = (q^{n+1} − q^n) / h this is g = 1 / I, c = γ (symplectic Euler; stable
+ *   while h √(k / I) < 2).
+ *
+ * Implicit, Ward & Lin 2003, appendix A: backward Euler with the spring linearised at the new
+ *   state, Δω = (−h k (q − q₀) − h² k ω₀) / (1 + h² k) for I = 1, γ = 0, M = 0. With I and γ:
+ *   I Δω = h (M − k (q + h (ω + Δω)) − γ (ω + Δω)), so
+ *   Δω = h (M − k q − (γ + h k) ω) / (I + h γ + h² k): g = 1 / (I + h γ + h² k), c = γ + h k.
+ *   Unconditionally stable for the spring and the damping.
+ *
+ * T is float, or vec2 for a (θ, φ) pair with their own stiffnesses. */
 #include "strands/strand_params.hh"
 
 namespace hairdyn {
 
-struct HingeCoefficients {
-  float inertia;   /* kg·m², I */
-  float stiffness; /* N·m/rad, k */
-  float damping;   /* N·m·s/rad, γ */
+template<typename T> struct HingeStep {
+  T gain;    /* g */
+  T damping; /* c */
 };
 
-/* Kurihara 1993, eq. 7: q^{n+1} − 2q^n + q^{n−1} + (γ h / I)(q^n − q^{n−1}) = h² M / I, written
- * with ω^{n+1/2} = (q^{n+1} − q^n) / h: ω += h (M − k q − γ ω) / I; q += h ω. Symplectic
- * Euler; stable while h √(k / I) < 2. */
-inline void integrate_hinge_explicit(const HingeCoefficients &c, const float h,
-                                     const float torque, float &q, float &omega)
-{
-  omega += h * (torque - c.stiffness * q - c.damping * omega) / c.inertia;
-  q += h * omega;
-}
-
-/* Ward & Lin 2003, appendix A: backward Euler, the spring linearised at the new state,
- *   Δω = h (M − k q − k h ω) / (1 + h² k)          (for I = 1, γ = 0, M = 0: the paper's form)
- * extended to I and γ: I Δω = h (M − k (q + h (ω + Δω)) − γ (ω + Δω)), hence
- *   Δω = h (M − k q − (γ + h k) ω) / (I + h γ + h² k),   Δq = h (ω + Δω).
- * Unconditionally stable for the spring and damping. */
-inline void integrate_hinge_implicit(const HingeCoefficients &c, const float h,
-                                     const float torque, float &q, float &omega)
-{
-  omega += h * (torque - c.stiffness * q - (c.damping + h * c.stiffness) * omega) /
-           (c.inertia + h * c.damping + h * h * c.stiffness);
-  q += h * omega;
-}
-
-inline void integrate_hinge(const Integrator integrator, const HingeCoefficients &c,
-                            const float h, const float torque, float &q, float &omega)
+template<typename T>
+HingeStep<T> hinge_step(const Integrator integrator, const float inertia, const T stiffness,
+                        const float damping, const float h)
 {
   if (integrator == Integrator::Explicit) {
-    integrate_hinge_explicit(c, h, torque, q, omega);
+    return {T(1.0f / inertia), T(damping)};
   }
-  else {
-    integrate_hinge_implicit(c, h, torque, q, omega);
-  }
+  return {1.0f / (inertia + h * damping + h * h * stiffness), damping + h * stiffness};
+}
+
+template<typename T>
+void advance_hinge(const HingeStep<T> &step, const float h, const T stiffness, const T torque,
+                   T &q, T &omega)
+{
+  omega += h * step.gain * (torque - stiffness * q - step.damping * omega);
+  q += h * omega;
 }
 
 }  // namespace hairdyn

@@ -105,6 +105,7 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
   rest_rotations_.assign(points, mat3(1.0f));
   angles_.assign(points, vec2(0.0f));
   angular_velocities_.assign(points, vec2(0.0f));
+  hinge_steps_.assign(points, HingeStep<vec2>{vec2(0.0f), vec2(0.0f)});
   positions_wo_.resize(points);
   velocities_wo_.resize(points);
 
@@ -149,17 +150,34 @@ float StrandSolver::moment_of_inertia(const int64_t point) const
   return params_.line_density * d * d * d / 3.0f;
 }
 
-vec3 StrandSolver::segment_force(const Substep &substep, const vec3 &wind_wo,
-                                 const vec3 &center_wo, const vec3 &center_velocity_wo,
-                                 const float length) const
+ForceField::ForceField(const StrandParams &params, const HeadAcceleration &head)
 {
-  /* Kurihara 1993, eq. 6: F = d (g + a) + d f, with the line density made explicit: gravity
-   * and the head's inertial force act on the segment's mass c d (the head accelerating by a
-   * pushes the strand by −c d a), the wind on its length. f = c_air (v_wind − v) is linear
-   * drag, so the same term carries the wind and damps motion through still air. */
-  const vec3 gravity_wo(0.0f, 0.0f, -params_.gravity);
-  return length * (params_.line_density * (gravity_wo - substep.head.at(center_wo)) +
-                   params_.air_drag * (wind_wo - center_velocity_wo));
+  /* Kurihara 1993, eq. 6: F = d (g + a) + d f, with the line density c made explicit: gravity
+   * and the head's inertial force act on the segment's mass c d (a head accelerating by a(r)
+   * pushes the strand by −c d a(r)), the wind on its length. f = c_air (v_wind − v) is linear
+   * drag, so the same term carries the wind and damps motion through still air. The head's
+   * field a(r) = a + ω̇ × (r − c) + ω × (ω × (r − c)) is affine in r: a(r) = a + A (r − c) with
+   * A = [ω̇]× + [ω]×², so per length F/d = c g − c a + c A c − c A r + c_air (v_wind − v). */
+  const vec3 w = head.angular_velocity;
+  const vec3 w_dot = head.angular_acceleration;
+  const mat3 cross_w_dot(vec3(0.0f, w_dot.z, -w_dot.y), vec3(-w_dot.z, 0.0f, w_dot.x),
+                         vec3(w_dot.y, -w_dot.x, 0.0f));
+  const mat3 cross_w(vec3(0.0f, w.z, -w.y), vec3(-w.z, 0.0f, w.x), vec3(w.y, -w.x, 0.0f));
+  const mat3 a = cross_w_dot + cross_w * cross_w;
+  const float c = params.line_density;
+  const vec3 gravity(0.0f, 0.0f, -params.gravity);
+  base = c * (gravity - head.linear + a * head.center);
+  gradient = -c * a;
+  air_drag = params.air_drag;
+}
+
+void StrandSolver::prepare_hinges(const IndexRange points, const float h)
+{
+  const vec2 k(params_.k_theta, params_.k_phi);
+  for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+    hinge_steps_[size_t(i)] = hinge_step(params_.integrator, moment_of_inertia(i), k,
+                                         params_.damping, h);
+  }
 }
 
 void StrandSolver::step_strand(const int64_t curve, const Span<Substep> substeps)
@@ -167,13 +185,15 @@ void StrandSolver::step_strand(const int64_t curve, const Span<Substep> substeps
   const IndexRange points = curve_points(curve_offsets_, curve);
   const size_t root = size_t(points.start);
   const size_t end = size_t(points.one_after_last());
-  const float c_density = params_.line_density;
+  prepare_hinges(points, substeps[0].h);
+  const vec2 k(params_.k_theta, params_.k_phi);
   for (const Substep &substep : substeps) {
     const float h = substep.h;
+    const float inv_h = 1.0f / h;
     /* The root frame and root are carried rigidly by the head. */
     mat3 frame = substep.rotation * root_frames_head_[size_t(curve)];
     vec3 node = substep.pose.transform_point(root_positions_head_[size_t(curve)]);
-    vec3 node_velocity = (node - positions_wo_[root]) / h;
+    vec3 node_velocity = (node - positions_wo_[root]) * inv_h;
     positions_wo_[root] = node;
     velocities_wo_[root] = node_velocity;
     const vec3 wind_wo = wind_.velocity_at(node, substep.time);
@@ -191,16 +211,17 @@ void StrandSolver::step_strand(const int64_t curve, const Span<Substep> substeps
       const vec3 tip = node + d * old_frame[2];
       /* Rigid segment: the tip moves with the parent's motion (tip − previous tip) plus its
        * own rotation; the centre moves at the mean of the two ends. */
-      const vec3 own_rate = omega.x * old_frame[0] + old_deflection.cos_theta * omega.y * old_frame[1];
-      const vec3 tip_velocity = (tip - positions_wo_[i]) / h + d * own_rate;
+      const vec3 own_rate = omega.x * old_frame[0] +
+                            old_deflection.cos_theta * omega.y * old_frame[1];
+      const vec3 tip_velocity = (tip - positions_wo_[i]) * inv_h + d * own_rate;
       const vec3 center = node + (0.5f * d) * old_frame[2];
       const vec3 center_velocity = 0.5f * (node_velocity + tip_velocity);
 
-      /* The force on this segment, lumped on its tip node. This is the one place where a
-       * node's force is assembled: a collision response (Kurihara 1993, eq. 12–15) filters
-       * it here, from the node's position `tip` and velocity `tip_velocity`, before it
-       * becomes a torque. */
-      const vec3 force = segment_force(substep, wind_wo, center, center_velocity, d);
+      /* The force on this segment, lumped on its tip node (Kurihara 1993, eq. 6). This is the
+       * one place where a node's force is assembled: a collision response (eq. 12–15)
+       * filters it here, from the node's position `tip` and velocity `tip_velocity`, before
+       * it becomes a torque. */
+      const vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo);
 
       /* Kurihara 1993, eq. 5: M = u F·e_θ and M = v F·e_φ with u = d / 2 and v = (d / 2) cos θ,
        * half the segment's projection onto the plane normal to the chart's pole. */
@@ -208,17 +229,13 @@ void StrandSolver::step_strand(const int64_t curve, const Span<Substep> substeps
       const vec2 torque(u * glm::dot(force, old_frame[0]),
                         u * old_deflection.cos_theta * glm::dot(force, old_frame[1]));
 
-      /* Kurihara 1993, eq. 1, 2 and 4; explicit eq. 7 or Ward & Lin 2003, appendix A. */
-      const float inertia = c_density * d * d * d / 3.0f;
-      integrate_hinge(params_.integrator, {inertia, params_.k_theta, params_.damping}, h,
-                      torque.x, angles.x, omega.x);
-      integrate_hinge(params_.integrator, {inertia, params_.k_phi, params_.damping}, h,
-                      torque.y, angles.y, omega.y);
+      /* Kurihara 1993, eq. 1 and 4: explicit eq. 7 or Ward & Lin 2003, appendix A. */
+      advance_hinge(hinge_steps_[i], h, k, torque, angles, omega);
 
       /* Rebuild the segment from its new angles: its length cannot change. */
       frame = Deflection(angles).rotate(chart);
       const vec3 new_tip = node + d * frame[2];
-      node_velocity = (new_tip - positions_wo_[i]) / h;
+      node_velocity = (new_tip - positions_wo_[i]) * inv_h;
       node = new_tip;
       positions_wo_[i] = node;
       velocities_wo_[i] = node_velocity;
@@ -249,8 +266,8 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     substep.time = time_ + t * frame_dt;
     substep.pose = HeadPose::interpolate(pose_, pose, t);
     substep.rotation = substep.pose.rotation_matrix();
-    substep.head = head;
-    substep.head.center = substep.pose.translation;
+    head.center = substep.pose.translation;
+    substep.forces = ForceField(params_, head);
   }
 
   parallel_for(curves_num(), 32, [&](const IndexRange range) {

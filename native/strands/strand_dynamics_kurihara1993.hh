@@ -32,6 +32,7 @@
 #include "core/math.hh"
 #include "core/span.hh"
 #include "strands/head_motion.hh"
+#include "strands/hinge_integration.hh"
 #include "strands/strand_params.hh"
 
 namespace hairdyn {
@@ -56,13 +57,31 @@ class WindField {
   float phases_[3][waves_num] = {};
 };
 
+/* The external force per length on a strand element (Kurihara 1993, eq. 6) during one
+ * substep: gravity and the head's inertial force, an affine function of position, plus the
+ * air's drag toward the wind's velocity. */
+struct ForceField {
+  vec3 base = vec3(0.0f);      /* N/m */
+  mat3 gradient = mat3(0.0f);  /* N/m², from the head's turning */
+  float air_drag = 0.0f;       /* N·s/m², c_air */
+
+  ForceField() = default;
+  ForceField(const StrandParams &params, const HeadAcceleration &head);
+
+  /* N, the force on a segment of length d whose centre is at r, moving at v. */
+  vec3 on_segment(const float d, const vec3 &r, const vec3 &v, const vec3 &wind) const
+  {
+    return d * (base + gradient * r + air_drag * (wind - v));
+  }
+};
+
 /* What every strand needs to know about one substep. */
 struct Substep {
   float h = 0.0f;    /* s, the substep's length */
   float time = 0.0f; /* s, simulated time at its end (for the wind) */
   HeadPose pose;     /* the head at its end */
   mat3 rotation = mat3(1.0f);
-  HeadAcceleration head;
+  ForceField forces;
 };
 
 class StrandSolver {
@@ -109,10 +128,9 @@ class StrandSolver {
  private:
   /* Zero angles and rates, the head at `pose` and still. */
   void reset_dynamics(const HeadPose &pose);
+  /* The integrator's coefficients of each segment for substeps of length h. */
+  void prepare_hinges(IndexRange points, float h);
   void step_strand(int64_t curve, Span<Substep> substeps);
-  /* Kurihara 1993, eq. 6: the external force on the segment ending at a node. */
-  vec3 segment_force(const Substep &substep, const vec3 &wind_wo, const vec3 &center_wo,
-                     const vec3 &center_velocity_wo, float length) const;
 
   StrandParams params_;
   WindField wind_;
@@ -129,6 +147,7 @@ class StrandSolver {
   std::vector<mat3> rest_rotations_; /* R_i = F_{i-1}ᵀ F_i at rest */
   std::vector<vec2> angles_;
   std::vector<vec2> angular_velocities_;
+  std::vector<HingeStep<vec2>> hinge_steps_; /* the integrator's coefficients this frame */
 
   /* Per point. */
   std::vector<vec3> positions_wo_;
