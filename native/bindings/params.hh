@@ -93,6 +93,21 @@ template<typename T> T convert_field(const py::handle value, const ParamInfo &in
   }
 }
 
+/* A Python value for the field `member` of `Params`, checked against that field's range: for
+ * functions that take a single parameter rather than the whole struct. */
+template<typename Params, typename T> T convert_param(T Params::*member, const py::handle value)
+{
+  T result{};
+  Params::for_each_field([&](auto field, const ParamInfo &info) {
+    if constexpr (std::is_same_v<decltype(field), T Params::*>) {
+      if (field == member) {
+        result = convert_field<T>(value, info);
+      }
+    }
+  });
+  return result;
+}
+
 /* Registers `Params` as a Python class `name` with one checked attribute per field,
  * `Params(**fields)`, `to_dict()` and the static `fields()` table (name, symbol, unit, min,
  * max, default, description, choices). */
