@@ -66,4 +66,5 @@ BENCHMARK(BM_StrandStep)
     ->Args({10000, 2, 1})
     ->Args({10000, 1, 0})
     ->Args({10000, 2, 0})
+    ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
