@@ -86,6 +86,32 @@ Span<int32_t> as_int(const py::handle obj, const char *name)
   return Span<int32_t>(static_cast<const int32_t *>(array.data()), array.shape(0));
 }
 
+Span<mat3> as_frames(const py::handle obj, const char *name)
+{
+  if (!py::isinstance<py::array>(obj)) {
+    fail(std::string(name) + " must be a numpy array, not " +
+         std::string(py::str(obj.get_type().attr("__name__"))));
+  }
+  const py::array array = py::reinterpret_borrow<py::array>(obj);
+  if (!array.dtype().is(py::dtype::of<float>())) {
+    fail(std::string(name) + " must have dtype float32, not " + std::string(py::str(array.dtype())));
+  }
+  if (array.ndim() != 3 || array.shape(1) != 3 || array.shape(2) != 3) {
+    fail(std::string(name) + " must have shape (N, 3, 3)");
+  }
+  if (!(array.flags() & py::array::c_style)) {
+    fail(std::string(name) + " must be C-contiguous (use numpy.ascontiguousarray)");
+  }
+  const Span<mat3> span(static_cast<const mat3 *>(array.data()), array.shape(0));
+  for (int64_t i = 0; i < span.size(); i++) {
+    if (!is_finite(span[i][0]) || !is_finite(span[i][1]) || !is_finite(span[i][2])) {
+      fail(std::string(name) + " has a value that is not a finite number (NaN or infinity) at frame " +
+           std::to_string(i));
+    }
+  }
+  return span;
+}
+
 /* A 4x4 matrix in Blender's row-major order (numpy.array(obj.matrix_world)), any float
  * dtype; glm stores columns, hence the transpose. */
 mat4 as_matrix(const py::handle obj, const char *name)
@@ -120,6 +146,24 @@ py::array float3_view(const Span<vec3> span, const py::handle owner)
   py::array view(py::dtype::of<float>(), {span.size(), int64_t(3)},
                  {int64_t(sizeof(vec3)), int64_t(sizeof(float))},
                  reinterpret_cast<const float *>(span.data()), owner);
+  view.attr("setflags")(py::arg("write") = false);
+  return view;
+}
+
+py::array frames_view(const Span<mat3> span, const py::handle owner)
+{
+  static_assert(sizeof(mat3) == 9 * sizeof(float), "mat3 must be 9 packed floats");
+  py::array view(py::dtype::of<float>(), {span.size(), int64_t(3), int64_t(3)},
+                 {int64_t(sizeof(mat3)), int64_t(sizeof(vec3)), int64_t(sizeof(float))},
+                 reinterpret_cast<const float *>(span.data()), owner);
+  view.attr("setflags")(py::arg("write") = false);
+  return view;
+}
+
+py::array int_view(const Span<int32_t> span, const py::handle owner)
+{
+  py::array view(py::dtype::of<int32_t>(), {span.size()}, {int64_t(sizeof(int32_t))},
+                 span.data(), owner);
   view.attr("setflags")(py::arg("write") = false);
   return view;
 }

@@ -32,14 +32,22 @@ Span<ivec3> as_int3(py::handle obj, const char *name);
 Span<int32_t> as_int(py::handle obj, const char *name);
 /* (N,) float32, all finite. */
 Span<float> as_float(py::handle obj, const char *name);
+/* (N, 3, 3) float32, all finite: N frames whose rows [i, 0], [i, 1], [i, 2] are the tangent,
+ * bitangent and normal (glm's column-major mat3, column by column). */
+Span<mat3> as_frames(py::handle obj, const char *name);
 /* A 4x4 matrix in Blender's row-major order (numpy.array(obj.matrix_world)), any float dtype. */
 mat4 as_matrix(py::handle obj, const char *name);
 /* Raises "Invalid hair: ..." unless the strands can be simulated. */
 void check_groom(Span<int32_t> curve_offsets, Span<vec3> positions);
 /* A read-only numpy (N, 3) float32 view of `span`; `owner` lives as long as the view. */
 py::array float3_view(Span<vec3> span, py::handle owner);
+/* A read-only numpy (N, 3, 3) float32 view of `span` (see as_frames). */
+py::array frames_view(Span<mat3> span, py::handle owner);
+/* A read-only numpy (N,) int32 view of `span`. */
+py::array int_view(Span<int32_t> span, py::handle owner);
 
 void bind_groom(py::module_ &m);
 void bind_collision(py::module_ &m);
+void bind_strands(py::module_ &m);
 
 }  // namespace hairdyn::bindings

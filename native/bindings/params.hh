@@ -8,6 +8,7 @@
 #include <string>
 #include <type_traits>
 
+#include "core/math.hh"
 #include "core/params.hh"
 
 namespace hairdyn::bindings {
@@ -41,8 +42,8 @@ template<typename T> std::string check_range(const T value, const ParamInfo &inf
   return {};
 }
 
-/* Python value -> field value, with a ValueError that names the field. */
-template<typename T> T convert_field(const py::handle value, const ParamInfo &info)
+/* Python number -> scalar or enum field value, with a ValueError that names the field. */
+template<typename T> T convert_scalar(const py::handle value, const ParamInfo &info)
 {
   T result{};
   try {
@@ -72,6 +73,41 @@ template<typename T> T convert_field(const py::handle value, const ParamInfo &in
   return result;
 }
 
+/* Python value -> field value; a vec3 field takes any sequence of 3 numbers, each checked
+ * against the field's range. */
+template<typename T> T convert_field(const py::handle value, const ParamInfo &info)
+{
+  if constexpr (std::is_same_v<T, vec3>) {
+    if (!py::isinstance<py::sequence>(value) || py::isinstance<py::str>(value) ||
+        py::len(value) != 3)
+    {
+      throw py::value_error(std::string(info.name) + " must be a sequence of 3 numbers, not " +
+                            std::string(py::str(py::repr(value))));
+    }
+    const py::sequence items = py::reinterpret_borrow<py::sequence>(value);
+    return vec3(convert_scalar<float>(items[0], info), convert_scalar<float>(items[1], info),
+                convert_scalar<float>(items[2], info));
+  }
+  else {
+    return convert_scalar<T>(value, info);
+  }
+}
+
+/* A Python value for the field `member` of `Params`, checked against that field's range: for
+ * functions that take a single parameter rather than the whole struct. */
+template<typename Params, typename T> T convert_param(T Params::*member, const py::handle value)
+{
+  T result{};
+  Params::for_each_field([&](auto field, const ParamInfo &info) {
+    if constexpr (std::is_same_v<decltype(field), T Params::*>) {
+      if (field == member) {
+        result = convert_field<T>(value, info);
+      }
+    }
+  });
+  return result;
+}
+
 /* Registers `Params` as a Python class `name` with one checked attribute per field,
  * `Params(**fields)`, `to_dict()` and the static `fields()` table (name, symbol, unit, min,
  * max, default, description, choices). */
@@ -85,10 +121,14 @@ template<typename Params> py::class_<Params> bind_params(py::module_ &m, const c
         info.name,
         [member](const Params &self) {
           if constexpr (std::is_enum_v<T>) {
-            return int32_t(self.*member);
+            return py::object(py::int_(int32_t(self.*member)));
+          }
+          else if constexpr (std::is_same_v<T, vec3>) {
+            const vec3 &v = self.*member;
+            return py::object(py::make_tuple(v.x, v.y, v.z));
           }
           else {
-            return self.*member;
+            return py::object(py::cast(self.*member));
           }
         },
         [member, info](Params &self, const py::handle value) {

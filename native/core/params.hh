@@ -6,8 +6,9 @@
  * that calls fn(&Struct::field, ParamInfo{...}) for each field, in declaration order. The
  * bindings generate attribute access, range checks and a `fields()` table from it, and a
  * Python test checks that table against the add-on's PropertyGroup, so UI and solver cannot
- * drift apart. Field types: float, int32_t, bool, or an enum class over int32_t (its names in
- * `choices`, comma separated, in value order). */
+ * drift apart. Field types: float, int32_t, bool, glm::vec3 (a 3-tuple in Python, min and max
+ * apply to each component), or an enum class over int32_t (its names in `choices`, comma
+ * separated, in value order). */
 #include <cstdint>
 #include <limits>
 

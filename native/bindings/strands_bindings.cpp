@@ -1,0 +1,221 @@
+/* Bindings of native/strands (Kurihara 1993 strand dynamics) and the child hairs of
+ * native/groom/children_kurihara1993. */
+#include <cmath>
+
+#include "bindings/arrays.hh"
+#include "bindings/params.hh"
+#include "groom/children_kurihara1993.hh"
+#include "groom/frames.hh"
+#include "groom/groom.hh"
+#include "strands/strand_dynamics_kurihara1993.hh"
+
+namespace hairdyn::bindings {
+
+namespace {
+
+/* One unit-able normal per strand, or an empty span for None. */
+Span<vec3> as_root_normals(const py::handle obj, const int64_t curves_num)
+{
+  if (obj.is_none()) {
+    return {};
+  }
+  const Span<vec3> normals = as_float3(obj, "root_normals_wo");
+  if (normals.size() != curves_num) {
+    fail("root_normals_wo must have one row per strand (" + std::to_string(curves_num) +
+         "), not " + std::to_string(normals.size()));
+  }
+  for (int64_t i = 0; i < normals.size(); i++) {
+    if (glm::length(normals[i]) < 1e-6f) {
+      fail("root_normals_wo has a zero-length normal at row " + std::to_string(i));
+    }
+  }
+  return normals;
+}
+
+Span<mat3> as_guide_frames(const py::handle obj, const char *name, const int64_t guides_num)
+{
+  const Span<mat3> frames = as_frames(obj, name);
+  if (frames.size() != guides_num) {
+    fail(std::string(name) + " must have one frame per guide (" + std::to_string(guides_num) +
+         "), not " + std::to_string(frames.size()));
+  }
+  return frames;
+}
+
+}  // namespace
+
+void bind_strands(py::module_ &m)
+{
+  bind_params<StrandParams>(m, "StrandParams",
+                            "Parameters of the Strands method (Kurihara 1993; Ward & Lin 2003).");
+
+  m.def(
+      "root_frames",
+      [](const py::handle curve_offsets, const py::handle positions,
+         const py::handle root_normals) {
+        const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+        const Span<vec3> points = as_float3(positions, "positions");
+        check_groom(offsets, points);
+        const Span<vec3> normals = as_root_normals(root_normals, offsets.size() - 1);
+        py::array_t<float> frames({offsets.size() - 1, int64_t(3), int64_t(3)});
+        const MutableSpan<mat3> r_frames(reinterpret_cast<mat3 *>(frames.mutable_data()),
+                                         offsets.size() - 1);
+        py::gil_scoped_release release;
+        compute_root_frames(offsets, points, normals, r_frames);
+        return frames;
+      },
+      py::arg("curve_offsets"), py::arg("positions"), py::arg("root_normals") = py::none(),
+      "Each strand's root frame (C, 3, 3) float32, rows tangent, bitangent, normal; the normal "
+      "is the first segment's direction where root_normals is None.");
+
+  py::class_<StrandSolver>(
+      m, "StrandSolver",
+      "Strands as chains of rigid segments whose angles obey Kurihara 1993, eq. 1-7, integrated "
+      "explicitly or implicitly (Ward & Lin 2003, appendix A).")
+      .def(py::init([](const py::handle curve_offsets, const py::handle rest_positions_wo,
+                       const py::handle head_to_world_rest, const py::handle root_normals_wo,
+                       const StrandParams &params) {
+             const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+             const Span<vec3> rest = as_float3(rest_positions_wo, "rest_positions_wo");
+             check_groom(offsets, rest);
+             const Span<vec3> normals = as_root_normals(root_normals_wo, offsets.size() - 1);
+             const mat4 head = as_matrix(head_to_world_rest, "head_to_world_rest");
+             py::gil_scoped_release release;
+             return new StrandSolver(offsets, rest, head, normals, params);
+           }),
+           py::arg("curve_offsets"), py::arg("rest_positions_wo"), py::arg("head_to_world_rest"),
+           py::arg("root_normals_wo") = py::none(), py::arg("params") = StrandParams())
+      .def(
+          "step",
+          [](StrandSolver &self, const double frame_dt, const py::handle head_to_world) {
+            if (!std::isfinite(frame_dt) || frame_dt <= 0.0 || frame_dt > 10.0) {
+              fail("frame_dt must be between 0 and 10 seconds, not " + std::to_string(frame_dt));
+            }
+            const mat4 head = as_matrix(head_to_world, "head_to_world");
+            py::gil_scoped_release release;
+            self.step(float(frame_dt), head);
+          },
+          py::arg("frame_dt"), py::arg("head_to_world"),
+          "Advance one frame of frame_dt seconds (params.substeps substeps), the head moving to "
+          "head_to_world.")
+      .def(
+          "reset",
+          [](StrandSolver &self, const py::handle head_to_world) {
+            if (head_to_world.is_none()) {
+              py::gil_scoped_release release;
+              self.reset();
+              return;
+            }
+            const mat4 head = as_matrix(head_to_world, "head_to_world");
+            py::gil_scoped_release release;
+            self.reset(head);
+          },
+          py::arg("head_to_world") = py::none(),
+          "Back to the rest shape, at rest; with head_to_world, carried rigidly to that head "
+          "transform (the start frame of a bake).")
+      .def_property(
+          "params", [](const StrandSolver &self) { return self.params(); },
+          [](StrandSolver &self, const StrandParams &params) { self.set_params(params); },
+          "A copy of the parameters; assign a StrandParams to change them between steps.")
+      .def_property_readonly("curves_num", &StrandSolver::curves_num)
+      .def_property_readonly(
+          "points_num", [](const StrandSolver &self) { return self.positions().size(); })
+      .def_property_readonly(
+          "curve_offsets",
+          [](py::object self) { return int_view(self.cast<StrandSolver &>().curve_offsets(), self); })
+      .def_property_readonly(
+          "positions",
+          [](py::object self) { return float3_view(self.cast<StrandSolver &>().positions(), self); },
+          "World-space positions (N, 3) float32: a read-only view of the solver's buffer.")
+      .def_property_readonly(
+          "velocities",
+          [](py::object self) {
+            return float3_view(self.cast<StrandSolver &>().velocities(), self);
+          },
+          "World-space velocities (N, 3) float32 in m/s at the end of the last substep.")
+      .def_property_readonly(
+          "rest_positions",
+          [](py::object self) {
+            return float3_view(self.cast<StrandSolver &>().rest_positions(), self);
+          })
+      .def_property_readonly(
+          "root_frames",
+          [](py::object self) {
+            return frames_view(self.cast<StrandSolver &>().root_frames(), self);
+          },
+          "Each strand's current root frame (C, 3, 3) float32, rows tangent, bitangent, normal "
+          "(for ChildHairs.update).");
+
+  py::class_<ChildHairs>(m, "ChildHairs",
+                         "Render hairs that follow simulated guides (Kurihara 1993, section 4).")
+      .def_static(
+          "around_guides",
+          [](const py::handle guide_offsets, const py::handle children_per_guide,
+             const py::handle child_spread, const py::handle seed) {
+            const Span<int32_t> offsets = as_int(guide_offsets, "guide_offsets");
+            if (offsets.size() < 2 || offsets[0] != 0) {
+              fail("guide_offsets must start at 0 and describe at least one guide");
+            }
+            for (int64_t guide = 0; guide + 1 < offsets.size(); guide++) {
+              if (offsets[guide + 1] - offsets[guide] < 2) {
+                fail("guide " + std::to_string(guide) + " has fewer than 2 points");
+              }
+            }
+            const int32_t children_num = convert_param(&StrandParams::children_per_guide,
+                                                       children_per_guide);
+            const float spread = convert_param(&StrandParams::child_spread, child_spread);
+            const int32_t seed_value = convert_param(&StrandParams::seed, seed);
+            py::gil_scoped_release release;
+            return ChildHairs::around_guides(offsets, children_num, spread, uint32_t(seed_value));
+          },
+          py::arg("guide_offsets"), py::arg("children_per_guide"), py::arg("child_spread"),
+          py::arg("seed") = 0,
+          "children_per_guide children per guide, rooted within child_spread meters of its root.")
+      .def_static(
+          "between_guides",
+          [](const py::handle guide_offsets, const py::handle guide_rest_positions_wo,
+             const py::handle guide_rest_root_frames, const py::handle roots_wo,
+             const int neighbours_num) {
+            const Span<int32_t> offsets = as_int(guide_offsets, "guide_offsets");
+            const Span<vec3> rest = as_float3(guide_rest_positions_wo, "guide_rest_positions_wo");
+            check_groom(offsets, rest);
+            const Span<mat3> frames = as_guide_frames(guide_rest_root_frames,
+                                                      "guide_rest_root_frames", offsets.size() - 1);
+            const Span<vec3> roots = as_float3(roots_wo, "roots_wo");
+            if (neighbours_num < 1 || neighbours_num > 16) {
+              fail("neighbours_num must be between 1 and 16, not " + std::to_string(neighbours_num));
+            }
+            py::gil_scoped_release release;
+            return ChildHairs::between_guides(offsets, rest, frames, roots, neighbours_num);
+          },
+          py::arg("guide_offsets"), py::arg("guide_rest_positions_wo"),
+          py::arg("guide_rest_root_frames"), py::arg("roots_wo"), py::arg("neighbours_num") = 3,
+          "One hair per root in roots_wo, blending the nearest guides by inverse root distance.")
+      .def(
+          "update",
+          [](ChildHairs &self, const py::handle guide_positions_wo,
+             const py::handle guide_root_frames) {
+            const Span<vec3> positions = as_float3(guide_positions_wo, "guide_positions_wo");
+            if (positions.size() != self.guide_points_num()) {
+              fail("guide_positions_wo must have " + std::to_string(self.guide_points_num()) +
+                   " rows, one per guide point, not " + std::to_string(positions.size()));
+            }
+            const Span<mat3> frames = as_guide_frames(guide_root_frames, "guide_root_frames",
+                                                      self.guides_num());
+            py::gil_scoped_release release;
+            self.update(positions, frames);
+          },
+          py::arg("guide_positions_wo"), py::arg("guide_root_frames"),
+          "Place the children on the guides' current shapes (e.g. StrandSolver.positions and "
+          "StrandSolver.root_frames).")
+      .def_property_readonly("curves_num", &ChildHairs::curves_num)
+      .def_property_readonly(
+          "curve_offsets",
+          [](py::object self) { return int_view(self.cast<ChildHairs &>().curve_offsets(), self); })
+      .def_property_readonly(
+          "positions",
+          [](py::object self) { return float3_view(self.cast<ChildHairs &>().positions(), self); },
+          "World-space child positions (M, 3) float32 after the last update (zeros before).");
+}
+
+}  // namespace hairdyn::bindings
