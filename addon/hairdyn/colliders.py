@@ -1,0 +1,98 @@
+"""The scene's colliders for one hair object: which meshes, which parts, the native maps.
+
+By Blender's convention the hair collides with its head (the Curves surface or the particle
+emitter) and with every mesh carrying Blender's Collision modifier; the artist adds more in
+the panel's list (or with --set colliders=A,B). Each collider becomes one native Collider
+whose parts are its vertex groups named in `collider_parts` (head, neck, torso...). Rigid
+motion only updates the collider's transform; a deforming collider is rebuilt each frame.
+"""
+import time
+
+import numpy as np
+
+from . import bridge, native, properties
+from .errors import HairdynError
+
+
+def collider_objects(hair_obj, head, scene):
+    """The meshes hair_obj collides with, each once, in a stable order."""
+    settings = hair_obj.hairdyn
+    found = []
+    if settings.use_default_colliders:
+        if head is not None:
+            found.append(head)
+        found += sorted((o for o in scene.objects if o.type == 'MESH' and
+                         any(m.type == 'COLLISION' for m in o.modifiers)), key=lambda o: o.name)
+    found += [item.object for item in settings.colliders if item.object is not None]
+    unique = []
+    for obj in found:
+        if obj not in unique and obj != hair_obj:
+            unique.append(obj)
+    return unique
+
+
+def part_names(settings):
+    return [name.strip() for name in settings.collider_parts.split(",") if name.strip()]
+
+
+def vertex_group_parts(obj, mesh_vertices_num, names):
+    """int32 vertex-index arrays, one per named vertex group the object has (weight > 0.5).
+
+    Blender has no bulk read of group weights, so this walks the vertices once, when the
+    collider is built (never per frame)."""
+    indices = {group.index: group.name for group in obj.vertex_groups if group.name in names}
+    if not indices:
+        return None
+    members = {name: [] for name in indices.values()}
+    for vertex in obj.data.vertices[:mesh_vertices_num]:
+        for element in vertex.groups:
+            name = indices.get(element.group)
+            if name is not None and element.weight > 0.5:
+                members[name].append(vertex.index)
+    parts = [np.array(members[name], dtype=np.int32) for name in names if members.get(name)]
+    return parts or None
+
+
+class Colliders:
+    """Native colliders for a hair object, kept in step with the scene frame by frame."""
+
+    def __init__(self, hair_obj, head, scene, depsgraph):
+        self.native = native.load()
+        settings = hair_obj.hairdyn
+        self.params = properties.native_params(settings.collision, self.native.CollisionParams)
+        self.objects = collider_objects(hair_obj, head, scene)
+        self.colliders = []
+        self.deforming = []
+        start = time.perf_counter()
+        for obj in self.objects:
+            mesh = bridge.read_mesh(obj, depsgraph)
+            parts = vertex_group_parts(obj, len(mesh.vertices), part_names(settings))
+            try:
+                collider = self.native.Collider(mesh.vertices, mesh.triangles, parts, self.params)
+            except ValueError as error:
+                raise HairdynError(f"Collider '{obj.name}': {error}") from None
+            collider.set_transform(mesh.matrix_world)
+            self.colliders.append(collider)
+            self.deforming.append(obj.is_deform_modified(scene, 'PREVIEW'))
+        self.build_ms = (time.perf_counter() - start) * 1000.0
+        self.set = self.native.ColliderSet(self.colliders)
+
+    def update(self, depsgraph):
+        """Follow the colliders to the current frame; returns the ms spent rebuilding."""
+        rebuild_ms = 0.0
+        for obj, collider, deforming in zip(self.objects, self.colliders, self.deforming):
+            if deforming:
+                mesh = bridge.read_mesh(obj, depsgraph)
+                collider.rebuild(mesh.vertices)
+                rebuild_ms += collider.build_ms
+                collider.set_transform(mesh.matrix_world)
+            else:
+                collider.set_transform(bridge.object_matrix(obj, depsgraph))
+        return rebuild_ms
+
+    def penetration(self, positions_wo):
+        """Exact penetration of points against the real triangles (not the maps)."""
+        return self.set.penetration_stats(positions_wo, tolerance=self.tolerance_wo())
+
+    def tolerance_wo(self):
+        return self.params.penetration_tolerance * self.set.size_wo
