@@ -138,7 +138,7 @@ inline bool read_obj(const std::string &path, TestMesh &r_mesh)
   return true;
 }
 
-inline const char *sintel_folder = "/work/shared/data/sintel";
-inline const char *sintel_bust_path = "/work/shared/data/sintel/sintel_bust.obj";
+inline const char *sintel_folder = HAIRDYN_SHARED_DATA "/sintel";
+inline const char *sintel_bust_path = HAIRDYN_SHARED_DATA "/sintel/sintel_bust.obj";
 
 }  // namespace hairdyn::test

@@ -117,6 +117,18 @@ void bind_strands(py::module_ &m)
           "params", [](const StrandSolver &self) { return self.params(); },
           [](StrandSolver &self, const StrandParams &params) { self.set_params(params); },
           "A copy of the parameters; assign a StrandParams to change them between steps.")
+      .def(
+          "set_colliders",
+          [](StrandSolver &self, const ColliderSet *colliders, const CollisionParams &params) {
+            self.set_colliders(colliders, params);
+          },
+          py::arg("colliders"), py::arg("params") = CollisionParams(), py::keep_alive<1, 2>(),
+          "Collide with a ColliderSet (kept alive by the solver), or None for no collision. "
+          "The set's colliders are read at every step: update their transforms first.")
+      .def_property_readonly("contacts_num", &StrandSolver::contacts_num,
+                             "Node-substeps the reaction constraint acted on in the last step.")
+      .def_property_readonly("projections_num", &StrandSolver::projections_num,
+                             "Node-substeps put back on a collider's surface in the last step.")
       .def_property_readonly("curves_num", &StrandSolver::curves_num)
       .def_property_readonly(
           "points_num", [](const StrandSolver &self) { return self.positions().size(); })

@@ -1,9 +1,9 @@
-#include "collision/mesh.hh"
-
 /* OpenMesh grows its vertex property arrays with default-constructed (deliberately
  * uninitialised) VectorT values that add_vertex then overwrites; GCC 12 flags that inlined
  * copy as maybe-uninitialised. The warning is about OpenMesh's code, not ours. */
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+#include "collision/mesh.hh"
 
 #include <sstream>
 

@@ -83,6 +83,29 @@ struct Deflection {
   }
 };
 
+constexpr int max_projection_attempts = 4;
+
+/* Where a segment of length d from `root` should point so that its tip, now at `tip` inside a
+ * collider, lies on the tangent plane at the contact point T instead: the point of that plane
+ * at distance d from the root nearest to the tip's swing. When the plane is out of reach,
+ * toward T itself. */
+vec3 swing_onto_plane(const vec3 &root, const vec3 &tip, const float d, const Contact &contact)
+{
+  const vec3 &n = contact.normal_wo;
+  const float height = glm::dot(root - contact.surface_point_wo, n);
+  if (std::abs(height) >= d) {
+    return contact.surface_point_wo;
+  }
+  const vec3 foot = root - height * n;
+  vec3 along = tip - foot;
+  along -= glm::dot(along, n) * n;
+  const float along_length = glm::length(along);
+  if (along_length < 1e-12f) {
+    return contact.surface_point_wo;
+  }
+  return foot + (std::sqrt(d * d - height * height) / along_length) * along;
+}
+
 }  // namespace
 
 StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions_wo,
@@ -139,6 +162,12 @@ void StrandSolver::set_params(const StrandParams &params)
   wind_ = WindField(params);
 }
 
+void StrandSolver::set_colliders(const ColliderSet *colliders, const CollisionParams &params)
+{
+  colliders_ = colliders;
+  collision_params_ = params;
+}
+
 float StrandSolver::moment_of_inertia(const int64_t point) const
 {
   /* Kurihara 1993, eq. 2 prints I = (1/3) c k⁴ d³. A uniform rod of line density c and length
@@ -180,8 +209,11 @@ void StrandSolver::prepare_hinges(const IndexRange points, const float h)
   }
 }
 
-void StrandSolver::step_strand(const int64_t curve, const Span<Substep> substeps)
+std::pair<int64_t, int64_t> StrandSolver::step_strand(const int64_t curve,
+                                                      const Span<Substep> substeps)
 {
+  int64_t contacts = 0;
+  int64_t projections = 0;
   const IndexRange points = curve_points(curve_offsets_, curve);
   const size_t root = size_t(points.start);
   const size_t end = size_t(points.one_after_last());
@@ -221,7 +253,15 @@ void StrandSolver::step_strand(const int64_t curve, const Span<Substep> substeps
        * one place where a node's force is assembled: a collision response (eq. 12–15)
        * filters it here, from the node's position `tip` and velocity `tip_velocity`, before
        * it becomes a torque. */
-      const vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo);
+      vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo);
+      Contact contact;
+      if (colliders_ != nullptr && colliders_->find_contact(tip, contact)) {
+        /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
+        const float mass = params_.line_density * d;
+        force = mass * reaction_constraint_force(force / mass, tip_velocity, contact,
+                                                 substep.reaction);
+        contacts++;
+      }
 
       /* Kurihara 1993, eq. 5: M = u F·e_θ and M = v F·e_φ with u = d / 2 and v = (d / 2) cos θ,
        * half the segment's projection onto the plane normal to the chart's pole. */
@@ -234,7 +274,25 @@ void StrandSolver::step_strand(const int64_t curve, const Span<Substep> substeps
 
       /* Rebuild the segment from its new angles: its length cannot change. */
       frame = Deflection(angles).rotate(chart);
-      const vec3 new_tip = node + d * frame[2];
+      vec3 new_tip = node + d * frame[2];
+      /* Ward & Lin 2003 §5.5: no node ends a step inside a body. The segment turns about its
+       * root until its tip lies on the surface's tangent plane at T, and stops turning (an
+       * inelastic contact). On a curved surface one turn can leave the tip a little inside;
+       * a few more settle it. */
+      for (int attempt = 0; attempt < max_projection_attempts; attempt++) {
+        if (colliders_ == nullptr || !colliders_->find_contact(new_tip, contact) ||
+            contact.depth <= substep.projection_tolerance_wo)
+        {
+          break;
+        }
+        const vec3 target = swing_onto_plane(node, new_tip, d, contact);
+        const vec3 local = glm::transpose(chart) * glm::normalize(target - node);
+        angles = vec2(std::asin(glm::clamp(local.x, -1.0f, 1.0f)), std::atan2(local.y, local.z));
+        omega = vec2(0.0f);
+        frame = Deflection(angles).rotate(chart);
+        new_tip = node + d * frame[2];
+        projections += attempt == 0 ? 1 : 0;
+      }
       node_velocity = (new_tip - positions_wo_[i]) * inv_h;
       node = new_tip;
       positions_wo_[i] = node;
@@ -242,6 +300,7 @@ void StrandSolver::step_strand(const int64_t curve, const Span<Substep> substeps
     }
   }
   root_frames_wo_[size_t(curve)] = substeps.last().rotation * root_frames_head_[size_t(curve)];
+  return {contacts, projections};
 }
 
 void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
@@ -268,13 +327,29 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     substep.rotation = substep.pose.rotation_matrix();
     head.center = substep.pose.translation;
     substep.forces = ForceField(params_, head);
+    if (colliders_ != nullptr) {
+      substep.reaction = ReactionConstants::from(collision_params_, substep.h);
+      substep.projection_tolerance_wo = collision_params_.projection_tolerance *
+                                        colliders_->size_wo();
+    }
   }
 
-  parallel_for(curves_num(), 32, [&](const IndexRange range) {
+  /* Counts per chunk of strands, summed in order: deterministic for any thread count. */
+  const int64_t grain = 32;
+  std::vector<std::pair<int64_t, int64_t>> counts(size_t((curves_num() + grain - 1) / grain));
+  parallel_for(curves_num(), grain, [&](const IndexRange range) {
+    std::pair<int64_t, int64_t> &chunk = counts[size_t(range.start / grain)];
     for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
-      step_strand(curve, substeps);
+      const auto [contacts, projections] = step_strand(curve, substeps);
+      chunk.first += contacts;
+      chunk.second += projections;
     }
   });
+  contacts_num_ = projections_num_ = 0;
+  for (const auto &[contacts, projections] : counts) {
+    contacts_num_ += contacts;
+    projections_num_ += projections;
+  }
 
   pose_ = pose;
   head_velocity_ = velocity;

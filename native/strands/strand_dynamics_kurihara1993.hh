@@ -29,6 +29,8 @@
  * stored at the segment's tip point; a strand's root slot holds nothing. */
 #include <vector>
 
+#include "collision/collider.hh"
+#include "collision/reaction_constraint_kurihara1993.hh"
 #include "core/math.hh"
 #include "core/span.hh"
 #include "strands/head_motion.hh"
@@ -78,6 +80,8 @@ struct ForceField {
 /* What every strand needs to know about one substep. */
 struct Substep {
   float h = 0.0f;    /* s, the substep's length */
+  ReactionConstants reaction; /* the collision response's constants for this h */
+  float projection_tolerance_wo = 0.0f; /* m, deepest a node may end the substep */
   float time = 0.0f; /* s, simulated time at its end (for the wind) */
   HeadPose pose;     /* the head at its end */
   mat3 rotation = mat3(1.0f);
@@ -105,6 +109,15 @@ class StrandSolver {
 
   const StrandParams &params() const { return params_; }
   void set_params(const StrandParams &params);
+  /* Hair–object collision (Kurihara 1993 §3; Ward & Lin 2003 §5.5): every node's force passes
+   * the reaction constraint where the node is inside a collider, and no node ends a substep
+   * deeper than params.projection_tolerance × the colliders' size. The colliders are the
+   * caller's and must stay alive while the solver steps; nullptr turns collision off. */
+  void set_colliders(const ColliderSet *colliders, const CollisionParams &params);
+  /* Nodes whose force the reaction constraint changed, and nodes put back on the surface,
+   * during the last step (all substeps). */
+  int64_t contacts_num() const { return contacts_num_; }
+  int64_t projections_num() const { return projections_num_; }
 
   int64_t curves_num() const { return int64_t(curve_offsets_.size()) - 1; }
   Span<int32_t> curve_offsets() const { return curve_offsets_; }
@@ -130,7 +143,8 @@ class StrandSolver {
   void reset_dynamics(const HeadPose &pose);
   /* The integrator's coefficients of each segment for substeps of length h. */
   void prepare_hinges(IndexRange points, float h);
-  void step_strand(int64_t curve, Span<Substep> substeps);
+  /* Steps one strand through the substeps; returns (contacts, projections). */
+  std::pair<int64_t, int64_t> step_strand(int64_t curve, Span<Substep> substeps);
 
   StrandParams params_;
   WindField wind_;
@@ -152,6 +166,12 @@ class StrandSolver {
   /* Per point. */
   std::vector<vec3> positions_wo_;
   std::vector<vec3> velocities_wo_;
+
+  /* Collision: the caller's colliders (or nullptr) and what the last step did with them. */
+  const ColliderSet *colliders_ = nullptr;
+  CollisionParams collision_params_;
+  int64_t contacts_num_ = 0;
+  int64_t projections_num_ = 0;
 
   /* The head at the end of the last step, and its velocity over that step. */
   HeadPose rest_pose_;
