@@ -166,7 +166,7 @@ def test_arrays_cross_without_copies(open_fixture):
     view = solver.positions
     address = view.ctypes.data
     assert not view.flags.writeable and view.base is solver
-    solver.step(np.diag([1.0, 1.0, 2.0, 1.0]))
+    solver.step(1.0 / 24.0, np.diag([1.0, 1.0, 2.0, 1.0]))
     assert solver.positions.ctypes.data == address  # the same buffer, updated in place
     assert np.allclose(view[:, 2], groom.positions_wo[:, 2] * 2.0)
 
@@ -213,7 +213,7 @@ def test_single_point_strand_is_a_clear_error(empty_scene):
     obj.data.position_data.foreach_set("vector", positions.ravel())
     obj.hairdyn.head = head
     with pytest.raises(HairdynError, match="strand 1 has 1 point.*at least 2"):
-        simulation.Simulation(obj, depsgraph())
+        simulation.Simulation(obj, depsgraph(), empty_scene)
 
 
 def test_nan_positions_are_a_clear_error(empty_scene):
@@ -225,7 +225,7 @@ def test_nan_positions_are_a_clear_error(empty_scene):
     obj.data.position_data.foreach_set("vector", positions.ravel())
     obj.hairdyn.head = head
     with pytest.raises(HairdynError, match="not a finite number"):
-        simulation.Simulation(obj, depsgraph())
+        simulation.Simulation(obj, depsgraph(), empty_scene)
 
 
 def test_hair_without_head_is_a_clear_error(empty_scene):
@@ -233,7 +233,7 @@ def test_hair_without_head_is_a_clear_error(empty_scene):
     positions = np.arange(9, dtype=np.float32).reshape(3, 3)
     obj.data.position_data.foreach_set("vector", positions.ravel())
     with pytest.raises(HairdynError, match="has no head"):
-        simulation.Simulation(obj, depsgraph())
+        simulation.Simulation(obj, depsgraph(), empty_scene)
 
 
 def test_not_hair_is_a_clear_error(open_fixture):

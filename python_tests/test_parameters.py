@@ -7,6 +7,7 @@ import pytest
 from hairdyn import native, properties
 
 MIRRORS = [
+    ("StrandParams", properties.HairdynStrandSettings),
     ("CollisionParams", properties.HairdynCollisionSettings),
 ]
 
@@ -24,6 +25,11 @@ def test_property_group_mirrors_native_struct(native_name, group_class):
     for field in fields:
         prop = rna[field["name"]]
         where = f"{group_class.__name__}.{field['name']}"
+        scale = properties.DISPLAY_SCALES.get((native_name, field["name"]), 1.0)
+        field = dict(field)
+        if scale != 1.0:  # shown in a scaled unit: compare in it, and the tooltip names it
+            field.update(default=field["default"] * scale, min=field["min"] * scale,
+                         max=field["max"] * scale, unit="")
         if field["choices"]:
             assert prop.type == 'ENUM', where
             assert [i.identifier for i in prop.enum_items] == \
@@ -58,7 +64,8 @@ def test_native_params_from_settings(native_name, group_class, open_fixture):
     numeric = next(f for f in fields if not f["choices"] and isinstance(f["default"], float))
     setattr(group, numeric["name"], numeric["max"] if math.isfinite(numeric["max"]) else 123.0)
     params = properties.native_params(group, getattr(native.load(), native_name))
-    assert getattr(params, numeric["name"]) == pytest.approx(getattr(group, numeric["name"]))
+    scale = properties.DISPLAY_SCALES.get((native_name, numeric["name"]), 1.0)
+    assert getattr(params, numeric["name"]) * scale == pytest.approx(getattr(group, numeric["name"]))
     enum = next((f for f in fields if f["choices"]), None)
     if enum is not None:
         last = enum["choices"].split(",")[-1]

@@ -25,6 +25,7 @@ from . import (errors, native, cache, hair_formats, properties, bridge, playback
                simulation, operators, io_import, ui)
 
 classes = (
+    properties.HairdynStrandSettings,
     properties.HairdynCollisionSettings,
     properties.HairdynColliderItem,
     properties.HairdynSettings,

@@ -83,7 +83,7 @@ def live_step(obj, scene, depsgraph):
 
     settings, frame = obj.hairdyn, scene.frame_current
     if frame == settings.frame_start:
-        live = simulation.Simulation(obj, depsgraph)
+        live = simulation.Simulation(obj, depsgraph, scene)
         _live[obj.name] = [live, frame]
     else:
         known = _live.get(obj.name)
@@ -92,7 +92,7 @@ def live_step(obj, scene, depsgraph):
         live = known[0]
         live.step(depsgraph, simulation.frame_dt(scene))
         known[1] = frame
-    simulation.write_outputs(obj, live.groom.curve_offsets, live.frame_arrays())
+    live.write(live.frame_arrays())
     return True
 
 

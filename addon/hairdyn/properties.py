@@ -5,13 +5,27 @@ them against hairdyn._native's `fields()` tables so the panel and the solver can
 """
 import bpy
 from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, FloatProperty,
-                       IntProperty, PointerProperty, StringProperty)
+                       FloatVectorProperty, IntProperty, PointerProperty, StringProperty)
 
 METHODS = (
     ("FOLLOW", "Follow Head",
      "Kinematic baseline: every strand keeps its rest shape in the head's frame and follows "
      "the head rigidly"),
+    ("STRANDS", "Strands",
+     "Strand dynamics: chains of rigid segments with hinge springs (Kurihara 1993), implicit "
+     "integration (Ward & Lin 2003)"),
 )
+
+# Properties shown in a unit scaled from the native struct's SI unit, so that hair-sized
+# values read as ordinary numbers in the panel (Blender shows at most 6 decimals):
+# property value = native value × scale.
+DISPLAY_SCALES = {
+    ("StrandParams", "k_theta"): 1e6,  # N·m/rad -> µN·m/rad
+    ("StrandParams", "k_phi"): 1e6,
+    ("StrandParams", "damping"): 1e9,  # N·m·s/rad -> nN·m·s/rad
+    ("StrandParams", "line_density"): 1e6,  # kg/m -> mg/m
+    ("StrandParams", "air_drag"): 1e6,  # N·s/m² -> µN·s/m²
+}
 
 
 def _is_mesh(_self, obj):
@@ -20,7 +34,8 @@ def _is_mesh(_self, obj):
 
 def native_params(group, params_class):
     """A native parameter struct (e.g. _native.CollisionParams) from its mirror PropertyGroup:
-    field for field, enums by their position in the native `choices`."""
+    field for field, enums by their position in the native `choices`, scaled fields back to
+    SI (DISPLAY_SCALES)."""
     values = {}
     for field in params_class.fields():
         value = getattr(group, field["name"])
@@ -28,8 +43,72 @@ def native_params(group, params_class):
             value = field["choices"].split(",").index(value.lower())
         elif not isinstance(value, (bool, int, float)):
             value = tuple(value)
+        scale = DISPLAY_SCALES.get((params_class.__name__, field["name"]))
+        if scale is not None:
+            value = value / scale
         values[field["name"]] = value
     return params_class(**values)
+
+
+class HairdynStrandSettings(bpy.types.PropertyGroup):
+    """Mirrors native StrandParams (native/strands/strand_params.hh) field for field."""
+
+    k_theta: FloatProperty(
+        name="Stiffness θ (k_θ)", default=0.1, min=0.0, max=1e6, soft_max=10.0, precision=4,
+        description="k_θ, µN·m/rad: hinge spring toward the rest zenith angle (Kurihara 1993, "
+                    "eq. 4), per segment")
+    k_phi: FloatProperty(
+        name="Stiffness φ (k_φ)", default=0.1, min=0.0, max=1e6, soft_max=10.0, precision=4,
+        description="k_φ, µN·m/rad: hinge spring toward the rest azimuth (Kurihara 1993, "
+                    "eq. 4), per segment")
+    damping: FloatProperty(
+        name="Damping (γ)", default=0.4, min=0.0, max=1e9, soft_max=100.0, precision=4,
+        description="γ, nN·m·s/rad: damping of each segment's angular velocity (Kurihara 1993, "
+                    "eq. 1)")
+    line_density: FloatProperty(
+        name="Line Density (c)", default=5.0, min=1e-3, max=1e6, soft_max=100.0, precision=3,
+        description="c, mg/m: mass per length of a strand; sets the moment of inertia "
+                    "(Kurihara 1993, eq. 2). A human hair is about 5 mg/m")
+    gravity: FloatProperty(
+        name="Gravity (g)", default=9.81, min=0.0, max=100.0, soft_max=30.0,
+        description="g, m/s²: gravitational acceleration along world -Z (Kurihara 1993, eq. 6)")
+    wind_speed: FloatProperty(
+        name="Wind Speed (|f|)", default=0.0, min=0.0, max=100.0, soft_max=20.0,
+        description="|f|, m/s: speed of the wind (Kurihara 1993, eq. 6)")
+    wind_direction: FloatVectorProperty(
+        name="Wind Direction", size=3, default=(0.0, 1.0, 0.0), min=-1.0, max=1.0,
+        subtype='DIRECTION',
+        description="World direction the wind blows toward (normalised; zero means no wind)")
+    wind_noise: FloatProperty(
+        name="Turbulence", default=0.3, min=0.0, max=10.0, soft_max=2.0,
+        description="Relative amount of smooth turbulence added to the wind")
+    wind_noise_frequency: FloatProperty(
+        name="Turbulence Frequency", default=0.5, min=0.0, max=100.0, soft_max=5.0,
+        description="Hz: frequency of the wind's turbulence")
+    air_drag: FloatProperty(
+        name="Air Drag (c_air)", default=50.0, min=0.0, max=1e6, soft_max=1000.0,
+        description="c_air, µN·s/m²: air drag per length and relative speed; carries the wind "
+                    "and damps motion through the air (Kurihara 1993, eq. 6)")
+    integrator: EnumProperty(
+        name="Integrator", default='IMPLICIT',
+        items=(('EXPLICIT', "Explicit", "Kurihara 1993, eq. 7: fast, needs small steps with "
+                                        "stiff hair"),
+               ('IMPLICIT', "Implicit", "Backward Euler, Ward & Lin 2003 appendix A: stable "
+                                        "at any stiffness")),
+        description="How the hinge equations are integrated")
+    substeps: IntProperty(
+        name="Substeps", default=4, min=1, max=1000, soft_max=32,
+        description="Solver steps per frame; the head's motion is interpolated over them")
+    children_per_guide: IntProperty(
+        name="Children per Guide", default=10, min=0, max=1000, soft_max=100,
+        description="Render hairs generated around each simulated guide (Kurihara 1993, §4)")
+    child_spread: FloatProperty(
+        name="Child Spread", default=0.01, min=0.0, max=1.0, soft_max=0.05, subtype='DISTANCE',
+        precision=4,
+        description="m: radius around a guide's root within which its children take root")
+    seed: IntProperty(
+        name="Seed", default=0, min=0, max=2147483647,
+        description="Seed of the wind turbulence and of the child roots")
 
 
 class HairdynCollisionSettings(bpy.types.PropertyGroup):
@@ -95,6 +174,11 @@ class HairdynSettings(bpy.types.PropertyGroup):
         name="Head", type=bpy.types.Object, poll=_is_mesh,
         description="Mesh the hair roots are attached to. Empty: the Curves object's surface, "
                     "or the mesh that emits the particle hair")
+    strands: PointerProperty(type=HairdynStrandSettings, name="Strand Settings")
+    output_children: PointerProperty(
+        name="Output Children", type=bpy.types.Object,
+        description="Curves object that receives the child hairs every frame (created when "
+                    "empty)")
     use_collision: BoolProperty(
         name="Collision", default=True,
         description="Collide the hair with the head and the other colliders (cylindrical and "
@@ -141,7 +225,7 @@ class HairdynSettings(bpy.types.PropertyGroup):
 def settings_dict(settings):
     """The solver parameters of a settings group as plain values (for a cache manifest):
     every property but object pointers and the cache's own settings."""
-    skip = {"rna_type", "name", "enabled", "head", "collider_index", "output_curves", "output_points", "cache_directory",
+    skip = {"rna_type", "name", "enabled", "head", "collider_index", "output_children", "output_curves", "output_points", "cache_directory",
             "use_cache", "use_live"}
     result = {}
     for prop in settings.bl_rna.properties:

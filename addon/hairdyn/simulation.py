@@ -1,9 +1,10 @@
 """One hair object's simulation: groom in, native solver, results out.
 
-The flow is one way: `Simulation(...)` reads the groom and the head at the rest frame and
-builds the native solver; `step()` reads the head's transform for the current frame and
-advances the solver; `write()` puts the result into the output objects. Operators, the
-headless entry point and playback all drive this one class.
+The flow is one way: `Simulation(...)` reads the groom, the head and the colliders at the
+rest frame and builds the native solver; `step()` reads the head's and the colliders'
+transforms for the current frame and advances the solver; `frame_arrays()` is what a frame
+produced, and `write()` puts it into the output objects. `Runner` steps a frame range for
+the operators, the headless entry point and the bake; playback steps live.
 """
 import time
 from pathlib import Path
@@ -34,29 +35,60 @@ def head_object(hair_obj, groom):
     return head
 
 
-class Simulation:
-    """Build at the rest frame (the scene must be on settings.frame_start or the first frame
-    to simulate), then step()/write() once per frame."""
+def root_normals(groom, head_mesh, chunk=2048):
+    """Per strand, the world normal of the head-mesh vertex nearest to its root."""
+    roots = groom.positions_wo[groom.curve_offsets[:-1]].astype(np.float64)
+    vertices = head_mesh.vertices_wo().astype(np.float64)
+    normals = head_mesh.normals_wo()
+    nearest = np.empty(len(roots), dtype=np.int64)
+    for start in range(0, len(roots), chunk):
+        block = roots[start:start + chunk]
+        distances = ((block[:, None, :] - vertices[None, :, :]) ** 2).sum(axis=2)
+        nearest[start:start + chunk] = distances.argmin(axis=1)
+    return np.ascontiguousarray(normals[nearest], dtype=np.float32)
 
-    def __init__(self, hair_obj, depsgraph):
+
+class Simulation:
+    """Build at the rest frame (the scene on the first frame to simulate), then step() and
+    frame_arrays() once per frame."""
+
+    def __init__(self, hair_obj, depsgraph, scene):
+        from . import colliders, properties
+
         self.native = native.load()
         self.hair_obj = hair_obj
-        self.settings = hair_obj.hairdyn
+        self.settings = settings = hair_obj.hairdyn
         self.groom = bridge.read_groom(hair_obj, depsgraph)
         self.head = head_object(hair_obj, self.groom)
-        self.method = self.settings.method
+        self.method = settings.method
+        head_matrix = bridge.object_matrix(self.head, depsgraph)
+        self.colliders = None
+        self.children = None
         try:
-            self.solver = self._make_solver(bridge.object_matrix(self.head, depsgraph))
+            if self.method == 'FOLLOW':
+                self.solver = self.native.FollowSolver(
+                    self.groom.curve_offsets, self.groom.positions_wo, head_matrix)
+            elif self.method == 'STRANDS':
+                params = properties.native_params(settings.strands, self.native.StrandParams)
+                normals = root_normals(self.groom, bridge.read_mesh(self.head, depsgraph))
+                self.solver = self.native.StrandSolver(
+                    self.groom.curve_offsets, self.groom.positions_wo, head_matrix, normals,
+                    params)
+                if params.children_per_guide > 0:
+                    self.children = self.native.ChildHairs.around_guides(
+                        self.groom.curve_offsets, params.children_per_guide,
+                        params.child_spread, params.seed)
+            else:
+                raise HairdynError(f"Unknown method '{self.method}'")
         except ValueError as error:
             raise HairdynError(f"'{hair_obj.name}': {error}") from None
+        if settings.use_collision:
+            self.colliders = colliders.Colliders(hair_obj, self.head, scene, depsgraph)
+            if hasattr(self.solver, "set_colliders"):
+                self.solver.set_colliders(self.colliders.set, self.colliders.params)
         self.previous_positions = np.array(self.solver.positions)
         self.velocities = np.zeros_like(self.previous_positions)
-
-    def _make_solver(self, head_matrix):
-        if self.method == 'FOLLOW':
-            return self.native.FollowSolver(self.groom.curve_offsets, self.groom.positions_wo,
-                                            head_matrix)
-        raise HairdynError(f"Unknown method '{self.method}'")
+        self.collision_ms = 0.0
 
     @property
     def positions(self):
@@ -64,14 +96,21 @@ class Simulation:
         return self.solver.positions
 
     def step(self, depsgraph, frame_dt):
-        """Advance to the scene's current frame; returns the native stepping time in ms."""
+        """Advance to the scene's current frame; returns the native stepping time in ms
+        (collision queries included; collider updates are in self.collision_ms)."""
         head_matrix = bridge.object_matrix(self.head, depsgraph)
+        if self.colliders is not None:
+            start = time.perf_counter()
+            self.colliders.update(depsgraph)
+            self.collision_ms = (time.perf_counter() - start) * 1000.0
         start = time.perf_counter()
-        self.solver.step(head_matrix)
+        self.solver.step(frame_dt, head_matrix)
         elapsed_ms = (time.perf_counter() - start) * 1000.0
         positions = self.solver.positions
         self.velocities = (positions - self.previous_positions) / np.float32(frame_dt)
         self.previous_positions[:] = positions
+        if self.children is not None:
+            self.children.update(positions, self.solver.root_frames)
         return elapsed_ms
 
     def stretch(self):
@@ -80,6 +119,12 @@ class Simulation:
 
     def nonfinite_points(self):
         return self.native.count_nonfinite(self.solver.positions)
+
+    def penetration(self):
+        """Exact penetration of the strands into the colliders' real triangles, or None."""
+        if self.colliders is None:
+            return None
+        return self.colliders.penetration(self.solver.positions)
 
     def frame_arrays(self):
         """Everything a frame produces, by name: what the cache stores and the outputs show.
@@ -100,10 +145,15 @@ class Simulation:
         """Width of each array of frame_arrays(), in order."""
         return {"position": 3, "velocity": 3, "direction": 3}
 
-    def restore(self, arrays):
-        """Continue from a cached frame (resuming a bake)."""
-        self.velocities = np.array(arrays["velocity"], dtype=np.float32)
-        self.previous_positions[:] = arrays["position"]
+    def write(self, arrays):
+        """A frame's arrays, and the child hairs, into the output objects."""
+        write_outputs(self.hair_obj, self.groom.curve_offsets, arrays)
+        if self.children is not None:
+            settings = self.settings
+            settings.output_children = bridge.ensure_curves_output(
+                settings.output_children, f"{self.hair_obj.name}_hairdyn_children",
+                np.asarray(self.children.curve_offsets), like=self.hair_obj)
+            bridge.write_curves(settings.output_children, self.children.positions)
 
 
 def write_outputs(hair_obj, curve_offsets, arrays):
@@ -136,6 +186,7 @@ class Runner:
     """
 
     def __init__(self, context, hair_obj, frame_start, frame_end, cache=None, resume_from=None):
+        """resume_from: the last frame already baked (its successors are simulated)."""
         if frame_end < frame_start:
             raise HairdynError(f"The frame range {frame_start}..{frame_end} is empty")
         self.context, self.hair_obj, self.cache = context, hair_obj, cache
@@ -143,37 +194,51 @@ class Runner:
         self.start_time = time.perf_counter()
         with playback.suspended():
             context.scene.frame_set(frame_start)
-        self.simulation = Simulation(hair_obj, context.evaluated_depsgraph_get())
+        self.simulation = Simulation(hair_obj, context.evaluated_depsgraph_get(), context.scene)
         if cache is not None:
             cache.check_topology(self.simulation.groom.curve_offsets)
         self.dt = frame_dt(context.scene)
         self.next_frame = frame_start
+        self.step_ms, self.collision_ms, self.nan_frames, self.stretch_max = [], [], 0, 0.0
+        self.penetration_max, self.deeper_num, self.checked_num = 0.0, 0, 0
         if resume_from is not None:
-            frame, arrays = resume_from
-            self.simulation.restore(arrays)
-            self.next_frame = frame + 1
-        self.step_ms, self.nan_frames, self.stretch_max = [], 0, 0.0
+            # Solvers carry state the cache does not hold (angles, the head's motion), so a
+            # resumed bake re-simulates the frames it keeps, without writing them: the same
+            # inputs give the same state, bit for bit.
+            while self.next_frame <= resume_from:
+                self._step_frame()
 
     @property
     def done(self):
         return self.next_frame > self.frame_end
 
-    def advance(self):
-        """Simulate, write and cache the next frame; returns (frame, native ms)."""
-        frame = self.next_frame
+    def _step_frame(self):
+        """Move the scene to the next frame and step the simulation there; returns its ms."""
         with playback.suspended():
-            self.context.scene.frame_set(frame)
+            self.context.scene.frame_set(self.next_frame)
         ms = self.simulation.step(self.context.evaluated_depsgraph_get(), self.dt)
-        self.step_ms.append(ms)
         self.next_frame += 1
+        return ms
+
+    def advance(self):
+        """Simulate, measure, write and cache the next frame; returns (frame, native ms)."""
+        frame = self.next_frame
+        ms = self._step_frame()
+        self.step_ms.append(ms)
+        self.collision_ms.append(self.simulation.collision_ms)
         if self.simulation.nonfinite_points():
             self.nan_frames += 1
             return frame, ms
         self.stretch_max = max(self.stretch_max, self.simulation.stretch())
+        penetration = self.simulation.penetration()
+        if penetration is not None:
+            self.penetration_max = max(self.penetration_max, penetration["penetration_max"])
+            self.deeper_num += penetration["deeper_num"]
+            self.checked_num += penetration["points_num"]
         arrays = self.simulation.frame_arrays()
         if self.cache is not None:
             self.cache.write_frame(frame, arrays)
-        write_outputs(self.hair_obj, self.simulation.groom.curve_offsets, arrays)
+        self.simulation.write(arrays)
         return frame, ms
 
     def report(self):
@@ -193,6 +258,13 @@ class Runner:
             "total_s": time.perf_counter() - self.start_time,
             "nan_frames": self.nan_frames,
             "stretch_max": float(self.stretch_max),
+            "collision": simulation.colliders is not None,
+            "colliders": [o.name for o in simulation.colliders.objects] if simulation.colliders else [],
+            "penetration_max": float(self.penetration_max),
+            "penetration_share": self.deeper_num / self.checked_num if self.checked_num else 0.0,
+            "penetration_tolerance": simulation.colliders.tolerance_wo() if simulation.colliders else None,
+            "collision_build_ms": simulation.colliders.build_ms if simulation.colliders else 0.0,
+            "collision_ms": float(np.median(self.collision_ms)) if self.collision_ms else 0.0,
             "blender_version": bpy.app.version_string,
             "native_version": simulation.native.__version__,
             "output_curves": settings.output_curves.name if settings.output_curves else None,
@@ -252,7 +324,7 @@ def start_bake(context, hair_obj, resume_after=None):
             if frame > last:
                 cache.frame_path(frame).unlink()
         return Runner(context, hair_obj, cache.manifest["frame_start"], cache.manifest["frame_end"],
-                      cache=cache, resume_from=(last, cache.read_frame(last)))
+                      cache=cache, resume_from=last)
     runner = Runner(context, hair_obj, settings.frame_start, settings.frame_end)
     runner.cache = Cache.create(
         directory, solver=settings.method.lower(), parameters=parameters,

@@ -67,12 +67,14 @@ void bind_groom(py::module_ &m)
            py::arg("curve_offsets"), py::arg("rest_positions_wo"), py::arg("head_to_world_rest"))
       .def(
           "step",
-          [](FollowSolver &self, const py::handle head_to_world) {
+          [](FollowSolver &self, const double /*frame_dt*/, const py::handle head_to_world) {
             const mat4 head = as_matrix(head_to_world, "head_to_world");
             py::gil_scoped_release release;
             self.step(head);
           },
-          py::arg("head_to_world"), "Place the strands for the head's current transform.")
+          py::arg("frame_dt"), py::arg("head_to_world"),
+          "Place the strands for the head's current transform. frame_dt is accepted so that "
+          "every solver steps alike; the baseline has no dynamics and ignores it.")
       .def("reset", &FollowSolver::reset, py::call_guard<py::gil_scoped_release>())
       .def_property_readonly(
           "positions",
