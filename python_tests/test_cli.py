@@ -55,9 +55,9 @@ def test_bad_parameters_exit_2(args, message, tmp_path):
 
 
 def test_bad_parameter_message_and_exit_code_in_a_real_process():
-    result = run_cli("head_curves.blend", "run", "--object", "Hair", "--set", "stiffness=3")
+    result = run_cli("head_curves.blend", "run", "--object", "Hair", "--set", "bendiness=3")
     assert result.returncode == 2
-    assert "hairdyn: error: unknown parameter 'stiffness'" in result.stderr
+    assert "hairdyn: error: unknown parameter 'bendiness'" in result.stderr
 
 
 def test_unknown_object_exit_2(capsys):

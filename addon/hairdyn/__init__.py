@@ -34,7 +34,9 @@ classes = (
     operators.HAIRDYN_OT_free_bake,
     io_import.HAIRDYN_OT_import_tfx,
     io_import.HAIRDYN_OT_import_cem_hair,
-    ui.HAIRDYN_PT_main,
+    operators.HAIRDYN_OT_collider_add,
+    operators.HAIRDYN_OT_collider_remove,
+    *ui.panel_classes,
 )
 
 

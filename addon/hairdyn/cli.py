@@ -8,7 +8,8 @@ With the bpy module: python addon/hairdyn/cli.py --blend scene.blend run --objec
 (--cache FOLDER, --resume to continue a bake that stopped).
 
 `--set name=value` sets any property of the object's hairdyn settings by name (enum values
-case-insensitive). Exit codes: 0 success, 1 the simulation failed (message on stderr, the
+case-insensitive; vectors as x,y,z; colliders as a comma-separated list of objects); a name
+shared by two groups is qualified: strands.damping, collision.damping. Exit codes: 0 success, 1 the simulation failed (message on stderr, the
 report still written when possible), 2 bad command line (unknown object, parameter or value).
 """
 import argparse
@@ -59,15 +60,21 @@ def _parse_value(prop, text):
             return False
         raise UsageError(f"{prop.identifier} must be true or false, not '{text}'")
     if kind in ('INT', 'FLOAT'):
+        parse = int if kind == 'INT' else float
+        texts = text.split(",")
+        if len(texts) != max(prop.array_length, 1):
+            raise UsageError(f"{prop.identifier} needs {max(prop.array_length, 1)} value(s), "
+                             f"not '{text}'")
         try:
-            value = int(text) if kind == 'INT' else float(text)
+            values = [parse(t) for t in texts]
         except ValueError:
             raise UsageError(f"{prop.identifier} must be {'an integer' if kind == 'INT' else 'a number'}, "
                              f"not '{text}'") from None
-        if not (prop.hard_min <= value <= prop.hard_max) or value != value:
-            raise UsageError(f"{prop.identifier} must be between {prop.hard_min} and "
-                             f"{prop.hard_max}, not {text}")
-        return value
+        for value in values:
+            if not (prop.hard_min <= value <= prop.hard_max) or value != value:
+                raise UsageError(f"{prop.identifier} must be between {prop.hard_min:g} and "
+                                 f"{prop.hard_max:g}, not {text}")
+        return values if prop.array_length else values[0]
     if kind == 'ENUM':
         identifiers = [item.identifier for item in prop.enum_items]
         for identifier in identifiers:
@@ -87,22 +94,68 @@ def _parse_value(prop, text):
     raise UsageError(f"{prop.identifier} cannot be set from the command line")
 
 
+def _settable(group, prefix=""):
+    """{qualified name: (owner group, RNA property)} of every settable property, nested groups
+    (strands.k_theta, collision.stiffness) included."""
+    import bpy
+
+    found = {}
+    for prop in group.bl_rna.properties:
+        name = prop.identifier
+        if name in ("rna_type", "name"):
+            continue
+        value = getattr(group, name)
+        if prop.type == 'POINTER' and isinstance(value, bpy.types.PropertyGroup):
+            found.update(_settable(value, f"{prefix}{name}."))
+        else:
+            found[prefix + name] = (group, prop)
+    return found
+
+
+def _resolve(settable, name):
+    """A qualified name, or an unqualified one that names exactly one property."""
+    if name in settable:
+        return settable[name]
+    matches = [key for key in settable if key.rsplit(".", 1)[-1] == name]
+    if len(matches) == 1:
+        return settable[matches[0]]
+    if matches:
+        raise UsageError(f"parameter '{name}' is ambiguous: use one of {', '.join(matches)}")
+    raise UsageError(f"unknown parameter '{name}'; known: {', '.join(sorted(settable))}")
+
+
 def apply_settings(settings, assignments):
-    """Apply NAME=VALUE strings to a hairdyn settings PropertyGroup."""
-    properties = {p.identifier: p for p in settings.bl_rna.properties
-                  if p.identifier not in ("rna_type", "name")}
+    """Apply NAME=VALUE strings to a hairdyn settings PropertyGroup. NAME is a property name,
+    qualified by its group where needed (strands.damping, collision.damping)."""
+    settable = _settable(settings)
     for assignment in assignments:
         name, sep, text = assignment.partition("=")
         name = name.strip()
         if not sep:
             raise UsageError(f"--set needs NAME=VALUE, not '{assignment}'")
-        if name not in properties:
-            raise UsageError(f"unknown parameter '{name}'; known: {', '.join(sorted(properties))}")
-        value = _parse_value(properties[name], text)
+        group, prop = _resolve(settable, name)
+        if prop.type == 'COLLECTION':
+            _set_colliders(group, prop, text)
+            continue
+        value = _parse_value(prop, text)
         try:
-            setattr(settings, name, value)
+            setattr(group, prop.identifier, value)
         except (TypeError, ValueError) as error:
             raise UsageError(f"{name}: {error}") from None
+
+
+def _set_colliders(group, prop, text):
+    """colliders=A,B: the list of extra collider objects."""
+    import bpy
+
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    missing = [n for n in names if bpy.data.objects.get(n) is None]
+    if missing:
+        raise UsageError(f"{prop.identifier}: there is no object named {', '.join(missing)}")
+    items = getattr(group, prop.identifier)
+    items.clear()
+    for name in names:
+        items.add().object = bpy.data.objects[name]
 
 
 def _ensure_addon():

@@ -170,3 +170,39 @@ class HAIRDYN_OT_free_bake(bpy.types.Operator):
         playback.forget(directory)
         self.report({'INFO'}, f"Freed the bake in '{directory}'")
         return {'FINISHED'}
+
+
+class HAIRDYN_OT_collider_add(bpy.types.Operator):
+    """Add a collider slot (pick the mesh in the list)"""
+
+    bl_idname = "hairdyn.collider_add"
+    bl_label = "Add Collider"
+    bl_options = {'REGISTER', 'UNDO', 'INTERNAL'}
+
+    @classmethod
+    def poll(cls, context):
+        return _hair_poll(context)
+
+    def execute(self, context):
+        settings = context.object.hairdyn
+        settings.colliders.add()
+        settings.collider_index = len(settings.colliders) - 1
+        return {'FINISHED'}
+
+
+class HAIRDYN_OT_collider_remove(bpy.types.Operator):
+    """Remove the selected collider from the list"""
+
+    bl_idname = "hairdyn.collider_remove"
+    bl_label = "Remove Collider"
+    bl_options = {'REGISTER', 'UNDO', 'INTERNAL'}
+
+    @classmethod
+    def poll(cls, context):
+        return _hair_poll(context) and len(context.object.hairdyn.colliders) > 0
+
+    def execute(self, context):
+        settings = context.object.hairdyn
+        settings.colliders.remove(settings.collider_index)
+        settings.collider_index = max(0, min(settings.collider_index, len(settings.colliders) - 1))
+        return {'FINISHED'}

@@ -1,59 +1,33 @@
-"""The hairdyn panel in the Physics tab of hair objects."""
+"""The hairdyn panels in the Physics tab of hair objects: one section per concern."""
 import bpy
 
 from . import bridge, native, playback
 from .errors import HairdynError
 
 
-class HAIRDYN_PT_main(bpy.types.Panel):
-    bl_label = "hairdyn"
+class _HairdynPanel:
     bl_space_type = 'PROPERTIES'
     bl_region_type = 'WINDOW'
     bl_context = "physics"
-
-    draw_calls = 0  # counted so a real-UI test can tell that the panel was drawn
 
     @classmethod
     def poll(cls, context):
         return bridge.is_hair_object(context.object)
 
-    def draw_header(self, context):
-        self.layout.prop(context.object.hairdyn, "enabled", text="")
+
+class _SubPanel(_HairdynPanel):
+    bl_parent_id = "HAIRDYN_PT_main"
+    bl_options = {'DEFAULT_CLOSED'}
+    methods = None  # the methods this section belongs to; None: all
+
+    @classmethod
+    def poll(cls, context):
+        return super().poll(context) and (cls.methods is None or
+                                          context.object.hairdyn.method in cls.methods)
 
     def draw(self, context):
-        type(self).draw_calls += 1
-        layout = self.layout
-        ok, message = native.status()
-        if not ok:
-            layout.label(text=message, icon='ERROR')
-        else:
-            layout.label(text=f"Native solver {message}", icon='CHECKMARK')
-        settings = context.object.hairdyn
-        layout.use_property_split = True
-        layout.prop(settings, "method")
-        layout.prop(settings, "head")
-        column = layout.column(align=True)
-        column.prop(settings, "frame_start", text="Frame Start")
-        column.prop(settings, "frame_end", text="End")
-        layout.prop(settings, "output_curves")
-        layout.prop(settings, "output_points")
-        row = layout.row()
-        row.enabled = ok
-        row.operator("hairdyn.simulate", icon='PLAY')
-
-        box = layout.box()
-        box.label(text="Cache")
-        box.prop(settings, "cache_directory")
-        box.prop(settings, "use_cache")
-        box.label(text=bake_status(context.object))
-        row = box.row(align=True)
-        row.enabled = ok
-        row.operator("hairdyn.bake", icon='REC').from_current = False
-        row.operator("hairdyn.bake", text="Bake from Current Frame").from_current = True
-        row.operator("hairdyn.free_bake", icon='TRASH', text="")
-        error = playback.last_error(context.object)
-        if error:
-            box.label(text=error, icon='ERROR')
+        self.layout.use_property_split = True
+        self.draw_settings(self.layout, context.object.hairdyn)
 
 
 def bake_status(obj):
@@ -73,4 +47,141 @@ def bake_status(obj):
     report = manifest.get("report")
     if report:
         text += f", {report['ms_per_frame']:.2f} ms/frame, stretch {report['stretch_max']:.1e}"
+        if report.get("collision"):
+            text += (f", penetration {report['penetration_max'] * 1000:.2f} mm "
+                     f"({report['penetration_share'] * 100:.2f}%)")
     return text
+
+
+class HAIRDYN_PT_main(_HairdynPanel, bpy.types.Panel):
+    bl_label = "hairdyn"
+
+    draw_calls = 0  # counted so a real-UI test can tell that the panel was drawn
+
+    def draw_header(self, context):
+        self.layout.prop(context.object.hairdyn, "enabled", text="")
+
+    def draw(self, context):
+        type(self).draw_calls += 1
+        layout = self.layout
+        ok, message = native.status()
+        if not ok:
+            layout.label(text=message, icon='ERROR')
+        settings = context.object.hairdyn
+        layout.use_property_split = True
+        layout.prop(settings, "method")
+        layout.prop(settings, "head")
+        column = layout.column(align=True)
+        column.prop(settings, "frame_start", text="Frame Start")
+        column.prop(settings, "frame_end", text="End")
+        layout.label(text=bake_status(context.object), icon='INFO')
+        error = playback.last_error(context.object)
+        if error:
+            layout.label(text=error, icon='ERROR')
+        row = layout.row(align=True)
+        row.enabled = ok
+        row.operator("hairdyn.bake", icon='REC').from_current = False
+        row.operator("hairdyn.bake", text="From Current Frame").from_current = True
+        row.operator("hairdyn.free_bake", icon='TRASH', text="")
+        row = layout.row()
+        row.enabled = ok
+        row.operator("hairdyn.simulate", icon='PLAY')
+
+
+class HAIRDYN_PT_dynamics(_SubPanel, bpy.types.Panel):
+    bl_label = "Dynamics"
+    bl_options = set()
+    methods = {'STRANDS'}
+
+    def draw_settings(self, layout, settings):
+        strands = settings.strands
+        layout.prop(strands, "integrator")
+        layout.prop(strands, "substeps")
+        column = layout.column(align=True)
+        column.prop(strands, "k_theta")
+        column.prop(strands, "k_phi")
+        layout.prop(strands, "damping")
+        layout.prop(strands, "line_density")
+        layout.prop(strands, "gravity")
+
+
+class HAIRDYN_PT_wind(_SubPanel, bpy.types.Panel):
+    bl_label = "Wind"
+    methods = {'STRANDS'}
+
+    def draw_settings(self, layout, settings):
+        strands = settings.strands
+        layout.prop(strands, "wind_speed")
+        layout.prop(strands, "wind_direction")
+        layout.prop(strands, "wind_noise")
+        layout.prop(strands, "wind_noise_frequency")
+        layout.prop(strands, "air_drag")
+
+
+class HAIRDYN_PT_children(_SubPanel, bpy.types.Panel):
+    bl_label = "Child Hairs"
+    methods = {'STRANDS'}
+
+    def draw_settings(self, layout, settings):
+        strands = settings.strands
+        layout.prop(strands, "children_per_guide")
+        layout.prop(strands, "child_spread")
+        layout.prop(strands, "seed")
+
+
+class HAIRDYN_UL_colliders(bpy.types.UIList):
+    def draw_item(self, _context, layout, _data, item, _icon, _active_data, _active_prop,
+                  _index=0, _flt_flag=0):
+        layout.prop(item, "object", text="", emboss=False, icon='MESH_DATA')
+
+
+class HAIRDYN_PT_collision(_SubPanel, bpy.types.Panel):
+    bl_label = "Collision"
+
+    def draw_header(self, context):
+        self.layout.prop(context.object.hairdyn, "use_collision", text="")
+
+    def draw_settings(self, layout, settings):
+        layout.active = settings.use_collision
+        layout.prop(settings, "use_default_colliders")
+        row = layout.row()
+        row.template_list("HAIRDYN_UL_colliders", "", settings, "colliders", settings,
+                          "collider_index", rows=2)
+        buttons = row.column(align=True)
+        buttons.operator("hairdyn.collider_add", icon='ADD', text="")
+        buttons.operator("hairdyn.collider_remove", icon='REMOVE', text="")
+        layout.prop(settings, "collider_parts")
+        collision = settings.collision
+        layout.prop(collision, "map_kind")
+        layout.prop(collision, "axis_mode")
+        column = layout.column(align=True)
+        column.prop(collision, "azimuth_num")
+        column.prop(collision, "height_num")
+        layout.prop(collision, "stiffness")
+        layout.prop(collision, "damping")
+        layout.prop(collision, "friction")
+        layout.prop(collision, "projection_tolerance")
+        layout.prop(collision, "penetration_tolerance")
+
+
+class HAIRDYN_PT_cache(_SubPanel, bpy.types.Panel):
+    bl_label = "Cache"
+
+    def draw_settings(self, layout, settings):
+        layout.prop(settings, "cache_directory")
+        layout.prop(settings, "use_cache")
+        layout.prop(settings, "use_live")
+
+
+class HAIRDYN_PT_output(_SubPanel, bpy.types.Panel):
+    bl_label = "Output"
+
+    def draw_settings(self, layout, settings):
+        layout.prop(settings, "output_curves")
+        layout.prop(settings, "output_points")
+        if settings.method == 'STRANDS':
+            layout.prop(settings, "output_children")
+
+
+panel_classes = (HAIRDYN_UL_colliders, HAIRDYN_PT_main, HAIRDYN_PT_dynamics, HAIRDYN_PT_wind,
+                 HAIRDYN_PT_children, HAIRDYN_PT_collision, HAIRDYN_PT_cache, HAIRDYN_PT_output)
