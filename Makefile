@@ -20,7 +20,9 @@ demo: build
 	blender -b blend_fixtures/head_shake.blend --python-exit-code 1 --python scripts/demo.py -- out/demo
 
 bench: build
-	$(BUILD)/hairdyn_bench
+	$(BUILD)/hairdyn_bench --benchmark_counters_tabular=true
+	blender -b blend_fixtures/head_particles.blend --python-exit-code 1 \
+	  --python scripts/bench_blender_hair.py -- out/bench/blender_hair.json
 
 fixtures:
 	blender -b --factory-startup --python-exit-code 1 --python blend_fixtures/make_fixtures.py
