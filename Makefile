@@ -17,7 +17,7 @@ test: build
 	@scripts/test.sh
 
 demo: build
-	blender -b blend_fixtures/head_shake.blend --python-exit-code 1 --python scripts/demo.py -- out/demo
+	blender -b blend_fixtures/head_shake.blend --python-exit-code 1 --python scripts/demo.py -- $(CURDIR)/out/demo
 
 bench: build
 	$(BUILD)/hairdyn_bench --benchmark_counters_tabular=true

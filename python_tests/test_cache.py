@@ -186,3 +186,26 @@ def test_unsaved_file_with_relative_cache_is_a_clear_error(empty_scene):
     with pytest.raises(RuntimeError, match="Save the .blend file first"):
         bpy.ops.hairdyn.bake()
     assert playback.load_frame(hair, 1) is False  # playback stays quiet: nothing was baked
+
+
+def test_strand_bake_plays_back_guides_and_children(saved_shake):
+    hair, tmp_path = saved_shake
+    hair.hairdyn.method = 'STRANDS'
+    hair.hairdyn.strands.children_per_guide = 3
+    hair.hairdyn.frame_end = 12
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    cache = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
+    assert cache.manifest["solver"] == "strands" and cache.has_children
+    assert cache.manifest["children"] == {"curves": 900, "points": 900 * 9}
+    for frame in (9, 4):
+        bpy.context.scene.frame_set(frame)
+        graph = bpy.context.evaluated_depsgraph_get()
+        guides = bridge.read_curves(hair.hairdyn.output_curves, graph).positions_wo
+        children = bridge.read_curves(hair.hairdyn.output_children, graph).positions_wo
+        assert np.array_equal(guides, cache.read_frame(frame)["position"])
+        assert np.array_equal(children, cache.read_children(frame))
+    assert not np.array_equal(cache.read_children(4), cache.read_children(9))  # it moves
+    cache.children_path(7).write_bytes(b"torn")
+    with pytest.raises(CacheError, match="children_000007.npy' is corrupted or truncated"):
+        cache.read_children(7)

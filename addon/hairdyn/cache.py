@@ -4,6 +4,9 @@
                                      frame range, timings
     <directory>/curve_offsets.npy    (C + 1,) int32: the topology, so playback can rebuild the
                                      output objects
+    <directory>/children_offsets.npy (K + 1,) int32 and children_000012.npy (M, 3) float32:
+                                     child hairs, when the solver makes them (written before
+                                     the frame file, so a frame file means a complete frame)
     <directory>/frame_000012.npy     (N, C) float32: position, velocity and every output
                                      attribute side by side, as the manifest's "columns" says
 
@@ -68,7 +71,7 @@ class Cache:
 
     @classmethod
     def create(cls, directory, *, solver, parameters, curve_offsets, columns, frame_start,
-               frame_end, fps, extra=None):
+               frame_end, fps, children_offsets=None, extra=None):
         """A new cache (frames of an older bake in `directory` are removed)."""
         directory = Path(directory)
         try:
@@ -95,12 +98,17 @@ class Cache:
             "frame_end": int(frame_end),
             "fps": fps,
             "timings": {},
+            "children": None if children_offsets is None else {
+                "curves": int(len(children_offsets) - 1), "points": int(children_offsets[-1])},
             **(extra or {}),
         }
         cache = cls(directory, manifest)
         cache.free()
         offsets = np.ascontiguousarray(curve_offsets, dtype=np.int32)
         _write_atomic(directory / "curve_offsets.npy", lambda file: np.save(file, offsets))
+        if children_offsets is not None:
+            children = np.ascontiguousarray(children_offsets, dtype=np.int32)
+            _write_atomic(directory / "children_offsets.npy", lambda file: np.save(file, children))
         cache.save_manifest()
         return cache
 
@@ -128,18 +136,51 @@ class Cache:
         """Removes every file of this cache (frames, topology, manifest)."""
         for frame in self.frames():
             self.frame_path(frame).unlink(missing_ok=True)
+        for path in self.directory.glob("children_*.npy"):
+            path.unlink(missing_ok=True)
         (self.directory / "curve_offsets.npy").unlink(missing_ok=True)
         self.manifest_path(self.directory).unlink(missing_ok=True)
 
+    def _load(self, path, what):
+        try:
+            return np.load(path, allow_pickle=False)
+        except FileNotFoundError:
+            raise CacheError(f"The cache {what} '{path}' is missing") from None
+        except (OSError, ValueError, EOFError) as error:
+            raise CacheError(f"The cache {what} '{path}' is corrupted or truncated ({error})") from None
+
     def curve_offsets(self):
         path = self.directory / "curve_offsets.npy"
-        try:
-            offsets = np.load(path, allow_pickle=False)
-        except (OSError, ValueError, EOFError) as error:
-            raise CacheError(f"The cache topology '{path}' cannot be read ({error})") from None
+        offsets = self._load(path, "topology")
         if offsets.dtype != np.int32 or topology_hash(offsets) != self.manifest["topology"]["hash"]:
             raise CacheError(f"The cache topology '{path}' does not match its manifest")
         return offsets
+
+    @property
+    def has_children(self):
+        return bool(self.manifest.get("children"))
+
+    def children_offsets(self):
+        path = self.directory / "children_offsets.npy"
+        offsets = self._load(path, "child topology")
+        expected = self.manifest["children"]
+        if offsets.dtype != np.int32 or len(offsets) != expected["curves"] + 1 or \
+                offsets[-1] != expected["points"]:
+            raise CacheError(f"The cache child topology '{path}' does not match its manifest")
+        return offsets
+
+    def children_path(self, frame):
+        return self.directory / f"children_{int(frame):06d}.npy"
+
+    def read_children(self, frame):
+        """(M, 3) float32 child hair positions of a frame."""
+        path = self.children_path(frame)
+        positions = self._load(path, "child frame")
+        if positions.dtype != np.float32 or positions.shape != (self.manifest["children"]["points"], 3):
+            raise CacheError(f"The cache child frame '{path}' holds {positions.dtype} "
+                             f"{positions.shape}, the manifest says float32 "
+                             f"({self.manifest['children']['points']}, 3)")
+        return positions
 
     def last_contiguous_frame(self):
         """The last frame of the unbroken run of frames from frame_start, or None."""
@@ -179,8 +220,9 @@ class Cache:
     def has_frame(self, frame):
         return self.frame_path(frame).is_file()
 
-    def write_frame(self, frame, arrays):
-        """arrays: name -> (N,) or (N, k) array for every column of the manifest."""
+    def write_frame(self, frame, arrays, children_positions=None):
+        """arrays: name -> (N,) or (N, k) array for every column of the manifest; the child
+        hairs' (M, 3) positions when the cache has children."""
         table = np.empty((self.points_num, self.width), dtype=np.float32)
         for name, (start, stop) in self.columns.items():
             values = np.asarray(arrays[name], dtype=np.float32)
@@ -190,17 +232,21 @@ class Cache:
                          if not np.isfinite(table[:, start:stop]).all())
             raise CacheError(f"Frame {frame} has values that are not finite numbers in "
                              f"{', '.join(bad)}; it was not written to the cache")
+        if self.has_children:
+            children = np.ascontiguousarray(children_positions, dtype=np.float32)
+            if children.shape != (self.manifest["children"]["points"], 3) or \
+                    not np.isfinite(children).all():
+                raise CacheError(f"Frame {frame} has child hairs of the wrong size or not "
+                                 "finite; it was not written to the cache")
+            _write_atomic(self.children_path(frame), lambda file: np.save(file, children))
         _write_atomic(self.frame_path(frame), lambda file: np.save(file, table))
 
     def read_frame(self, frame):
         """name -> array for one frame, or CacheError naming the file."""
         path = self.frame_path(frame)
-        try:
-            table = np.load(path, allow_pickle=False)
-        except FileNotFoundError:
-            raise CacheError(f"Frame {frame} is not in the cache ('{path}' is missing)") from None
-        except (OSError, ValueError, EOFError) as error:
-            raise CacheError(f"The cache frame '{path}' is corrupted or truncated ({error})") from None
+        if not path.is_file():
+            raise CacheError(f"Frame {frame} is not in the cache ('{path}' is missing)")
+        table = self._load(path, "frame")
         if table.dtype != np.float32 or table.shape != (self.points_num, self.width):
             raise CacheError(f"The cache frame '{path}' holds {table.dtype} {table.shape}, the "
                              f"manifest says float32 ({self.points_num}, {self.width})")

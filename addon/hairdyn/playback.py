@@ -13,7 +13,7 @@ from bpy.app.handlers import persistent
 
 from .errors import HairdynError
 
-_open_caches = {}  # cache directory -> (manifest mtime, Cache, curve_offsets)
+_open_caches = {}  # cache directory -> (manifest mtime, Cache, curve_offsets, children offsets)
 _errors = {}  # object name -> the last playback error, shown in the panel
 _suspended = [0]  # > 0 while a simulation moves the frame itself
 _live = {}  # object name -> [Simulation, last simulated frame]
@@ -42,7 +42,8 @@ def last_error(obj):
 
 
 def open_cache(directory):
-    """(Cache, curve_offsets) for a directory, or None when nothing is baked there."""
+    """(Cache, curve_offsets, children offsets or None) for a directory, or None when
+    nothing is baked there."""
     from .cache import Cache
 
     manifest = Cache.manifest_path(directory)
@@ -54,9 +55,10 @@ def open_cache(directory):
     known = _open_caches.get(str(directory))
     if known is None or known[0] != mtime:
         cache = Cache.open(directory)
-        known = (mtime, cache, cache.curve_offsets())
+        known = (mtime, cache, cache.curve_offsets(),
+                 cache.children_offsets() if cache.has_children else None)
         _open_caches[str(directory)] = known
-    return known[1], known[2]
+    return known[1:]
 
 
 def load_frame(obj, frame):
@@ -70,10 +72,12 @@ def load_frame(obj, frame):
     opened = open_cache(directory)
     if opened is None:
         return False
-    cache, curve_offsets = opened
+    cache, curve_offsets, children_offsets = opened
     if not cache.has_frame(frame):
         return False
-    simulation.write_outputs(obj, curve_offsets, cache.read_frame(frame))
+    children = None if children_offsets is None else \
+        (children_offsets, cache.read_children(frame))
+    simulation.write_outputs(obj, curve_offsets, cache.read_frame(frame), children)
     return True
 
 

@@ -145,21 +145,26 @@ class Simulation:
         """Width of each array of frame_arrays(), in order."""
         return {"position": 3, "velocity": 3, "direction": 3}
 
+    def children_arrays(self):
+        """(curve_offsets, positions) of the child hairs, or None."""
+        if self.children is None:
+            return None
+        return np.asarray(self.children.curve_offsets), self.children.positions
+
     def write(self, arrays):
         """A frame's arrays, and the child hairs, into the output objects."""
-        write_outputs(self.hair_obj, self.groom.curve_offsets, arrays)
-        if self.children is not None:
-            settings = self.settings
-            settings.output_children = bridge.ensure_curves_output(
-                settings.output_children, f"{self.hair_obj.name}_hairdyn_children",
-                np.asarray(self.children.curve_offsets), like=self.hair_obj)
-            bridge.write_curves(settings.output_children, self.children.positions)
+        write_outputs(self.hair_obj, self.groom.curve_offsets, arrays, self.children_arrays())
 
 
-def write_outputs(hair_obj, curve_offsets, arrays):
+def write_outputs(hair_obj, curve_offsets, arrays, children=None):
     """A frame's arrays into the hair object's output objects (created when missing):
-    positions into the output Curves, all arrays as point attributes of the output mesh."""
+    positions into the output Curves, all arrays as point attributes of the output mesh, and
+    children=(curve_offsets, positions) into the child-hair Curves."""
     settings, name = hair_obj.hairdyn, hair_obj.name
+    if children is not None:
+        settings.output_children = bridge.ensure_curves_output(
+            settings.output_children, f"{name}_hairdyn_children", children[0], like=hair_obj)
+        bridge.write_curves(settings.output_children, children[1])
     settings.output_curves = bridge.ensure_curves_output(
         settings.output_curves, f"{name}_hairdyn", curve_offsets, like=hair_obj)
     settings.output_points = bridge.ensure_points_output(
@@ -237,7 +242,8 @@ class Runner:
             self.checked_num += penetration["points_num"]
         arrays = self.simulation.frame_arrays()
         if self.cache is not None:
-            self.cache.write_frame(frame, arrays)
+            children = self.simulation.children_arrays()
+            self.cache.write_frame(frame, arrays, None if children is None else children[1])
         self.simulation.write(arrays)
         return frame, ms
 
@@ -331,6 +337,8 @@ def start_bake(context, hair_obj, resume_after=None):
         curve_offsets=runner.simulation.groom.curve_offsets,
         columns=runner.simulation.frame_columns(), frame_start=settings.frame_start,
         frame_end=settings.frame_end, fps=1.0 / runner.dt,
+        children_offsets=None if runner.simulation.children is None else
+        np.asarray(runner.simulation.children.curve_offsets),
         extra={"object": hair_obj.name})
     playback.forget(directory)
     return runner
