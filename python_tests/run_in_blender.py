@@ -8,5 +8,7 @@ from pathlib import Path
 import pytest
 
 args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-code = pytest.main([str(Path(__file__).resolve().parent), "-p", "no:cacheprovider", *args])
+if not any(Path(arg.split("::")[0]).exists() for arg in args):
+    args.append(str(Path(__file__).resolve().parent))  # no test path given: all of them
+code = pytest.main(["-p", "no:cacheprovider", *args])
 sys.exit(int(code))

@@ -16,13 +16,13 @@ if "bpy" in locals():
     import importlib
 
     for _module in (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: F821
-                    simulation, operators, io_import, ui):  # noqa: F821
+                    simulation, operators, io_import, presets, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy
 
 from . import (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: E402
-               simulation, operators, io_import, ui)
+               simulation, operators, io_import, presets, ui)
 
 classes = (
     properties.HairdynStrandSettings,
@@ -36,6 +36,8 @@ classes = (
     io_import.HAIRDYN_OT_import_cem_hair,
     operators.HAIRDYN_OT_collider_add,
     operators.HAIRDYN_OT_collider_remove,
+    presets.HAIRDYN_MT_presets,
+    presets.HAIRDYN_OT_preset_add,
     *ui.panel_classes,
 )
 
@@ -46,6 +48,7 @@ def register():
     bpy.types.Object.hairdyn = bpy.props.PointerProperty(type=properties.HairdynSettings)
     playback.register()
     io_import.register()
+    presets.install_bundled()
 
 
 def unregister():

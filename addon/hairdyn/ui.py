@@ -1,7 +1,7 @@
 """The hairdyn panels in the Physics tab of hair objects: one section per concern."""
 import bpy
 
-from . import bridge, native, playback
+from . import bridge, native, playback, presets
 from .errors import HairdynError
 
 
@@ -68,6 +68,7 @@ class HAIRDYN_PT_main(_HairdynPanel, bpy.types.Panel):
         if not ok:
             layout.label(text=message, icon='ERROR')
         settings = context.object.hairdyn
+        presets.draw_menu(layout)
         layout.use_property_split = True
         layout.prop(settings, "method")
         layout.prop(settings, "head")
