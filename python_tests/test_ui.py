@@ -1,4 +1,5 @@
-"""A real Blender window under Xvfb: the panel is drawn, its button runs, a screenshot is kept."""
+"""A real Blender window under Xvfb: the panel is drawn, its operators run from the UI
+(simulate, and the modal bake with its progress), screenshots are kept as artifacts."""
 import json
 import shutil
 import subprocess
@@ -22,11 +23,16 @@ def test_panel_in_a_real_window(fixture, obj, artifacts, tmp_path):
     screenshot.unlink(missing_ok=True)
     command = [xvfb_run, "-a", "-s", "-screen 0 1280x800x24", blender, "--factory-startup",
                str(FIXTURES / fixture), "--python", str(UI_CHECK), "--", obj, str(out_json),
-               str(screenshot)]
+               str(screenshot), str(tmp_path / "cache")]
     process = subprocess.run(command, capture_output=True, text=True, timeout=180)
     assert out_json.is_file(), process.stdout[-3000:] + process.stderr[-3000:]
     result = json.loads(out_json.read_text())
     assert result["error"] is None, result
     assert result["draw_calls"] > 0
     assert result["simulate"] == ["FINISHED"]
+    assert result["bake_invoke"] == ["RUNNING_MODAL"]  # the modal bake, as from the button
+    assert result["baked_frames"] == 10
+    assert sorted(p.name for p in (tmp_path / "cache" / obj).glob("frame_*.npy"))[-1] == \
+        "frame_000010.npy"
     assert screenshot.is_file() and screenshot.stat().st_size > 10_000
+    assert screenshot.with_name(screenshot.stem + "_baked.png").is_file()

@@ -1,6 +1,7 @@
-"""Run inside a real Blender window (xvfb-run): show the hairdyn panel, screenshot it.
+"""Run inside a real Blender window (xvfb-run): show the hairdyn panel, screenshot it, run
+the simulate operator and the modal bake from the UI, screenshot again.
 
-    blender --factory-startup FIXTURE --python python_tests/ui_check.py -- OBJECT OUT_JSON OUT_PNG
+    blender --factory-startup FIXTURE --python python_tests/ui_check.py -- OBJECT OUT_JSON OUT_PNG CACHE_DIR
 """
 import json
 import sys
@@ -11,7 +12,8 @@ import bpy
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "addon"))
 import hairdyn  # noqa: E402
 
-object_name, out_json, out_png = sys.argv[sys.argv.index("--") + 1:][:3]
+object_name, out_json, out_png, cache_dir = sys.argv[sys.argv.index("--") + 1:][:4]
+BAKE_FRAMES = 10
 result = {"steps": []}
 
 
@@ -62,14 +64,47 @@ def screenshot():
         with bpy.context.temp_override(window=window, screen=window.screen, area=area):
             bpy.ops.screen.screenshot(filepath=out_png)
         result["steps"].append("screenshot")
+        obj = bpy.data.objects[object_name]
         with bpy.context.temp_override(window=window, screen=window.screen, area=area,
-                                       object=bpy.data.objects[object_name]):
+                                       object=obj):
             result["simulate"] = sorted(bpy.ops.hairdyn.simulate())
         result["steps"].append("simulated")
-        finish()
+        obj.hairdyn.method = 'STRANDS'
+        obj.hairdyn.cache_directory = cache_dir
+        obj.hairdyn.frame_end = BAKE_FRAMES
+        with bpy.context.temp_override(window=window, screen=window.screen, area=area,
+                                       object=obj):
+            result["bake_invoke"] = sorted(bpy.ops.hairdyn.bake('INVOKE_DEFAULT'))
+        result["steps"].append("bake started")
+        bpy.app.timers.register(wait_for_bake, first_interval=0.2)
     except Exception as error:
         finish(f"screenshot: {error!r}")
     return None
+
+
+def wait_for_bake():
+    """Poll until the modal bake has written its manifest as complete (or 60 s pass)."""
+    from hairdyn import simulation
+    from hairdyn.cache import Cache
+
+    result.setdefault("polls", 0)
+    result["polls"] += 1
+    try:
+        manifest = Cache.open(simulation.cache_directory(bpy.data.objects[object_name])).manifest
+    except Exception:  # not created yet
+        manifest = {}
+    if manifest.get("complete"):
+        result["baked_frames"] = manifest["report"]["frames"]
+        window, area = properties_area()
+        with bpy.context.temp_override(window=window, screen=window.screen, area=area):
+            bpy.ops.screen.screenshot(filepath=out_png.replace(".png", "_baked.png"))
+        result["steps"].append("baked")
+        finish()
+        return None
+    if result["polls"] > 300:
+        finish("the modal bake did not finish within 60 s")
+        return None
+    return 0.2
 
 
 if not hasattr(bpy.types.Object, "hairdyn"):
