@@ -4,7 +4,7 @@ CMAKE := /usr/bin/cmake
 BUILD := build
 JOBS ?= 2
 
-.PHONY: setup build test demo bench fixtures clean
+.PHONY: setup build test demo bench package fixtures clean
 
 setup:
 	@scripts/setup.sh
@@ -23,6 +23,9 @@ bench: build
 	$(BUILD)/hairdyn_bench --benchmark_counters_tabular=true
 	blender -b blend_fixtures/head_particles.blend --python-exit-code 1 \
 	  --python scripts/bench_blender_hair.py -- out/bench/blender_hair.json
+
+package: build
+	python3 scripts/package.py out/dist
 
 fixtures:
 	blender -b --factory-startup --python-exit-code 1 --python blend_fixtures/make_fixtures.py
