@@ -209,3 +209,39 @@ def test_strand_bake_plays_back_guides_and_children(saved_shake):
     cache.children_path(7).write_bytes(b"torn")
     with pytest.raises(CacheError, match="children_000007.npy' is corrupted or truncated"):
         cache.read_children(7)
+
+
+def test_object_deleted_during_a_bake_keeps_the_frames(saved_shake):
+    hair, tmp_path = saved_shake
+    runner = simulation.start_bake(bpy.context, hair)
+    for _ in range(5):
+        runner.advance()
+    bpy.data.objects.remove(hair)
+    from hairdyn.errors import HairdynError
+
+    with pytest.raises(HairdynError, match="deleted during the simulation; the frames written "
+                                           "before are kept"):
+        runner.advance()
+    report = simulation.finish_bake(runner)
+    assert report["object"] == "Hair" and report["frames"] >= 5
+    cache = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
+    frames = cache.frames()  # every frame simulated before the failure, complete
+    assert frames[:5] == [1, 2, 3, 4, 5] and frames == list(range(1, len(frames) + 1))
+    assert not cache.manifest["complete"]
+    for frame in frames:
+        assert cache.read_frame(frame)["position"].shape == (2700, 3)
+
+
+def test_reloading_the_file_during_playback_forgets_the_open_caches(saved_shake):
+    hair, tmp_path = saved_shake
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    bpy.context.scene.frame_set(3)
+    assert playback._open_caches  # playback opened the cache
+    bpy.ops.wm.save_mainfile()
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "shake.blend"), load_ui=False)
+    assert not playback._open_caches  # the load handler dropped what belonged to the old file
+    bpy.context.scene.frame_set(4)
+    hair = bpy.data.objects["Hair"]
+    cache = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
+    assert np.array_equal(read_output(hair), cache.read_frame(4)["position"])

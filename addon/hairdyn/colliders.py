@@ -61,6 +61,7 @@ class Colliders:
         settings = hair_obj.hairdyn
         self.params = properties.native_params(settings.collision, self.native.CollisionParams)
         self.objects = collider_objects(hair_obj, head, scene)
+        self.names = [obj.name for obj in self.objects]
         self.colliders = []
         self.deforming = []
         start = time.perf_counter()

@@ -125,12 +125,10 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
         runner = self._runner
         try:
             frame, ms = runner.advance()
-        except (HairdynError, ReferenceError) as error:
+        except HairdynError as error:
             self._end_modal(context)
-            message = str(error) if isinstance(error, HairdynError) else \
-                "The hair object was deleted during the bake"
             self._finish(context, cancelled=True)
-            self.report({'ERROR'}, f"{message}; the frames baked before are kept")
+            self.report({'ERROR'}, str(error))
             return {'CANCELLED'}
         context.window_manager.progress_update(frame)
         if context.workspace is not None:

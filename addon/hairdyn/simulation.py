@@ -195,6 +195,7 @@ class Runner:
         if frame_end < frame_start:
             raise HairdynError(f"The frame range {frame_start}..{frame_end} is empty")
         self.context, self.hair_obj, self.cache = context, hair_obj, cache
+        self.object_name = hair_obj.name  # for the report, even if the object goes away
         self.frame_start, self.frame_end = frame_start, frame_end
         self.start_time = time.perf_counter()
         with playback.suspended():
@@ -226,7 +227,16 @@ class Runner:
         return ms
 
     def advance(self):
-        """Simulate, measure, write and cache the next frame; returns (frame, native ms)."""
+        """Simulate, measure, write and cache the next frame; returns (frame, native ms).
+        A hair object or collider deleted meanwhile is a HairdynError; the frames already
+        written stay."""
+        try:
+            return self._advance()
+        except ReferenceError:
+            raise HairdynError("The hair object or its head was deleted during the simulation; "
+                               "the frames written before are kept") from None
+
+    def _advance(self):
         frame = self.next_frame
         ms = self._step_frame()
         self.step_ms.append(ms)
@@ -251,9 +261,15 @@ class Runner:
         """The figures every solver reports (see README, "Headless runs")."""
         import bpy
 
-        simulation, settings = self.simulation, self.hair_obj.hairdyn
+        simulation = self.simulation
+        try:
+            settings = self.hair_obj.hairdyn
+            outputs = [settings.output_curves.name if settings.output_curves else None,
+                       settings.output_points.name if settings.output_points else None]
+        except ReferenceError:  # the object was deleted: the figures still stand
+            outputs = [None, None]
         return {
-            "object": self.hair_obj.name,
+            "object": self.object_name,
             "solver": simulation.method.lower(),
             "strands": simulation.groom.curves_num,
             "points": simulation.groom.points_num,
@@ -265,7 +281,7 @@ class Runner:
             "nan_frames": self.nan_frames,
             "stretch_max": float(self.stretch_max),
             "collision": simulation.colliders is not None,
-            "colliders": [o.name for o in simulation.colliders.objects] if simulation.colliders else [],
+            "colliders": simulation.colliders.names if simulation.colliders else [],
             "penetration_max": float(self.penetration_max),
             "penetration_share": self.deeper_num / self.checked_num if self.checked_num else 0.0,
             "penetration_tolerance": simulation.colliders.tolerance_wo() if simulation.colliders else None,
@@ -273,8 +289,8 @@ class Runner:
             "collision_ms": float(np.median(self.collision_ms)) if self.collision_ms else 0.0,
             "blender_version": bpy.app.version_string,
             "native_version": simulation.native.__version__,
-            "output_curves": settings.output_curves.name if settings.output_curves else None,
-            "output_points": settings.output_points.name if settings.output_points else None,
+            "output_curves": outputs[0],
+            "output_points": outputs[1],
         }
 
 
