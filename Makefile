@@ -23,6 +23,8 @@ bench: build
 	$(BUILD)/hairdyn_bench --benchmark_counters_tabular=true
 	blender -b blend_fixtures/head_particles.blend --python-exit-code 1 \
 	  --python scripts/bench_blender_hair.py -- out/bench/blender_hair.json
+	blender -b --factory-startup --python-exit-code 1 \
+	  --python scripts/bench_playback.py -- out/bench/playback.json
 
 package: build
 	python3 scripts/package.py out/dist
