@@ -137,3 +137,24 @@ def test_set_nested_parameters_from_the_command_line(open_fixture):
                          ("substeps=0", "between 1 and 1000"), ("colliders=Nope", "Nope")]:
         with pytest.raises(cli.UsageError, match=message):
             cli.apply_settings(settings, [bad])
+
+
+def test_interpolated_children_spread_over_the_scalp(open_fixture):
+    hair = strands_on(open_fixture, "head_curves.blend")
+    hair.hairdyn.strands.children_per_guide = 2
+    hair.hairdyn.strands.child_mode = 'INTERPOLATE'
+    simulation.run(bpy.context, hair, 1, 4)
+    kids = bridge.read_curves(hair.hairdyn.output_children, depsgraph())
+    guides = bridge.read_curves(hair.hairdyn.output_curves, depsgraph())
+    assert kids.curves_num == 600
+    kid_roots = kids.positions_wo[kids.curve_offsets[:-1]]
+    guide_roots = guides.positions_wo[guides.curve_offsets[:-1]]
+    # On the head (near its surface), among the guides, not stacked on them.
+    body = bridge.read_mesh(bpy.data.objects["Body"], depsgraph()).vertices_wo()
+    to_head = np.min(np.linalg.norm(kid_roots[:, None] - body[None], axis=2), axis=1)
+    to_guide = np.min(np.linalg.norm(kid_roots[:, None] - guide_roots[None], axis=2), axis=1)
+    assert to_head.max() < 0.02
+    assert np.median(to_guide) > 1e-3
+    # Each child is shaped like the guides around it: it hangs down like they do.
+    kid_tips = kids.positions_wo[kids.curve_offsets[1:] - 1]
+    assert np.all(kid_tips[:, 2] < kid_roots[:, 2] + 0.05)

@@ -102,6 +102,13 @@ class HairdynStrandSettings(bpy.types.PropertyGroup):
     children_per_guide: IntProperty(
         name="Children per Guide", default=10, min=0, max=1000, soft_max=100,
         description="Render hairs generated around each simulated guide (Kurihara 1993, §4)")
+    child_mode: EnumProperty(
+        name="Children", default='CLUSTER',
+        items=(('CLUSTER', "Clusters", "Around each guide, within the spread of its root "
+                                       "(Kurihara 1993, §4)"),
+               ('INTERPOLATE', "Interpolated", "Spread over the scalp between the guides, each "
+                                               "blending its nearest guides")),
+        description="Where the child hairs take root")
     child_spread: FloatProperty(
         name="Child Spread", default=0.01, min=0.0, max=1.0, soft_max=0.05, subtype='DISTANCE',
         precision=4,

@@ -48,6 +48,45 @@ def root_normals(groom, head_mesh, chunk=2048):
     return np.ascontiguousarray(normals[nearest], dtype=np.float32)
 
 
+def _nearest_distances(points, targets, chunk=2048):
+    """Distance from each point to its nearest target (brute force in chunks)."""
+    result = np.empty(len(points))
+    for start in range(0, len(points), chunk):
+        block = points[start:start + chunk]
+        result[start:start + chunk] = np.sqrt(
+            ((block[:, None, :] - targets[None, :, :]) ** 2).sum(axis=2).min(axis=1))
+    return result
+
+
+def scalp_points(groom, head_mesh, count, seed):
+    """`count` random points on the part of the head the groom's roots cover: area-weighted
+    over the triangles whose corners all lie within twice the typical root spacing of a
+    root."""
+    roots = groom.positions_wo[groom.curve_offsets[:-1]].astype(np.float64)
+    if len(roots) > 1:
+        spacing = np.median(np.sort(np.sqrt(((roots[:, None] - roots[None]) ** 2).sum(axis=2)),
+                                    axis=1)[:, 1])
+    else:
+        spacing = np.linalg.norm(groom.positions_wo[1] - groom.positions_wo[0])
+    vertices = head_mesh.vertices_wo().astype(np.float64)
+    near = _nearest_distances(vertices, roots) <= 2.0 * spacing
+    triangles = head_mesh.triangles[near[head_mesh.triangles].all(axis=1)]
+    if len(triangles) == 0:
+        raise HairdynError("No part of the head lies under the hair roots: interpolated "
+                           "children need the roots on the head's surface")
+    corners = vertices[triangles]
+    areas = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
+                                          corners[:, 2] - corners[:, 0]), axis=1)
+    rng = np.random.default_rng(seed)
+    chosen = rng.choice(len(triangles), size=count, p=areas / areas.sum())
+    u, v = rng.random(count), rng.random(count)
+    flip = u + v > 1.0
+    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
+    a, b, c = corners[chosen, 0], corners[chosen, 1], corners[chosen, 2]
+    points = a + u[:, None] * (b - a) + v[:, None] * (c - a)
+    return np.ascontiguousarray(points, dtype=np.float32)
+
+
 class Simulation:
     """Build at the rest frame (the scene on the first frame to simulate), then step() and
     frame_arrays() once per frame."""
@@ -70,14 +109,11 @@ class Simulation:
                     self.groom.curve_offsets, self.groom.positions_wo, head_matrix)
             elif self.method == 'STRANDS':
                 params = properties.native_params(settings.strands, self.native.StrandParams)
-                normals = root_normals(self.groom, bridge.read_mesh(self.head, depsgraph))
+                head_mesh = bridge.read_mesh(self.head, depsgraph)
                 self.solver = self.native.StrandSolver(
-                    self.groom.curve_offsets, self.groom.positions_wo, head_matrix, normals,
-                    params)
-                if params.children_per_guide > 0:
-                    self.children = self.native.ChildHairs.around_guides(
-                        self.groom.curve_offsets, params.children_per_guide,
-                        params.child_spread, params.seed)
+                    self.groom.curve_offsets, self.groom.positions_wo, head_matrix,
+                    root_normals(self.groom, head_mesh), params)
+                self.children = self._make_children(params, head_mesh)
             else:
                 raise HairdynError(f"Unknown method '{self.method}'")
         except ValueError as error:
@@ -89,6 +125,19 @@ class Simulation:
         self.previous_positions = np.array(self.solver.positions)
         self.velocities = np.zeros_like(self.previous_positions)
         self.collision_ms = 0.0
+
+    def _make_children(self, params, head_mesh):
+        """Kurihara 1993 §4: child hairs clustered around the guides, or spread over the
+        scalp between them; None when there are none."""
+        count = params.children_per_guide
+        if count == 0:
+            return None
+        if params.child_mode == 0:  # cluster
+            return self.native.ChildHairs.around_guides(
+                self.groom.curve_offsets, count, params.child_spread, params.seed)
+        roots = scalp_points(self.groom, head_mesh, count * self.groom.curves_num, params.seed)
+        return self.native.ChildHairs.between_guides(
+            self.groom.curve_offsets, self.groom.positions_wo, self.solver.root_frames, roots)
 
     @property
     def positions(self):

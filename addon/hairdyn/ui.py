@@ -126,7 +126,10 @@ class HAIRDYN_PT_children(_SubPanel, bpy.types.Panel):
     def draw_settings(self, layout, settings):
         strands = settings.strands
         layout.prop(strands, "children_per_guide")
-        layout.prop(strands, "child_spread")
+        layout.prop(strands, "child_mode")
+        row = layout.row()
+        row.active = strands.child_mode == 'CLUSTER'
+        row.prop(strands, "child_spread")
         layout.prop(strands, "seed")
 
 

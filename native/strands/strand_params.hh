@@ -25,6 +25,12 @@ enum class Integrator : int32_t {
   Implicit = 1,
 };
 
+/* Where child hairs take root (Kurihara 1993, §4). */
+enum class ChildMode : int32_t {
+  Cluster = 0,     /* Around each guide, within child_spread of its root. */
+  Interpolate = 1, /* Anywhere on the scalp, blending the nearest guides. */
+};
+
 struct StrandParams {
   /* N·m/rad, k_θ (Kurihara 1993, eq. 4): hinge spring toward the rest zenith angle. */
   float k_theta = 1e-7f;
@@ -54,6 +60,8 @@ struct StrandParams {
   int32_t substeps = 4;
   /* Child hairs per simulated guide (Kurihara 1993, §4 cluster model). */
   int32_t children_per_guide = 10;
+  /* Clusters around each guide, or hairs spread over the scalp between the guides. */
+  ChildMode child_mode = ChildMode::Cluster;
   /* m, radius around a guide's root within which its children take root. */
   float child_spread = 0.01f;
   /* Seed of the wind turbulence and of the child roots: equal seeds give equal bakes. */
@@ -101,6 +109,11 @@ struct StrandParams {
     fn(&StrandParams::children_per_guide,
        ParamInfo{"children_per_guide", "", "", 0.0, 1000.0,
                  "Render hairs generated around each simulated guide (Kurihara 1993, §4)"});
+    fn(&StrandParams::child_mode,
+       ParamInfo{"child_mode", "", "", 0.0, 1.0,
+                 "Children around each guide (Kurihara 1993, §4 clusters) or spread over the "
+                 "scalp, blending the nearest guides",
+                 "cluster,interpolate"});
     fn(&StrandParams::child_spread,
        ParamInfo{"child_spread", "", "m", 0.0, 1.0,
                  "Radius around a guide's root within which its children take root"});
