@@ -16,16 +16,16 @@ struct LcpParams {
   float root_normal_weight = 1.0f;  /* w_n of eq. 4: weight of the scalp normal. */
   float whorl_u = 0.5f;             /* u of the whorl centre on the scalp (eq. 4's n_w). */
   float whorl_v = 0.5f;             /* v of the whorl centre. */
-  float beam_length = 0.15f; /* m, b = (EI / (λg))^(1/3): bending length of Anjyo's cantilever. */
+  float beam_length = 0.06f; /* m, b = (EI / (λg))^(1/3): bending length of Anjyo's cantilever. */
   int32_t seed = 0;          /* Random seed of the Poisson-disc sampling. */
 
   /* ---- connections and hair dynamics (§3.2-3.3) ---- */
   float h1 = 0.016f;       /* m, h₁: smoothing length of the connections (pairs within 2h₁). */
   float a0 = 0.5f;         /* a₀: pairs less aligned than this (eq. 6) are not connected. */
   int32_t neighbor_num = 12; /* N_n: connections kept per particle. */
-  float young_modulus = 2.0e4f; /* Pa, E: tensile modulus kept constant (eq. 10-11). */
+  float young_modulus = 1.0e4f; /* Pa, E: tensile modulus kept constant (eq. 10-11). */
   float material_density = 1300.0f; /* kg/m³, δ: density of the hair material (eq. 9). */
-  float spring_damping = 0.002f; /* s, γ: spring damping, force γ·αk·(v_ij·x̂_ij). */
+  float spring_damping = 0.005f; /* s, γ: spring damping, force γ·αk·(v_ij·x̂_ij). */
   float hair_density = 10.0f; /* kg/m³, ρ_h: mass of hair per volume of hair; sets m_i. */
 
   /* ---- hair-hair interactions (§3.4) ---- */
@@ -40,7 +40,7 @@ struct LcpParams {
 
   /* ---- other forces (§3.5) ---- */
   float gravity = 9.81f;      /* m/s², g: along world −Z (Blender is Z-up). */
-  float air_friction = 0.5f;  /* 1/s: damping force −(this)·m·v against still air. */
+  float air_friction = 2.0f;  /* 1/s: damping force −(this)·m·v against still air. */
   float wind_speed = 0.0f;    /* m/s: free-stream speed of the air particles; 0 = no wind. */
   float wind_heading = 0.0f;  /* rad: horizontal direction the wind blows to (0 = +X). */
   float wind_particle_spacing = 0.03f; /* m: spacing of the SPH air particles. */

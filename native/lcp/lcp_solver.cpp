@@ -62,7 +62,6 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
   k_.resize(size_t(connections_.size()));
   alpha_k_.resize(size_t(connections_.size()));
   side_sums_.resize(size_t(2 * n));
-  stiffness_.resize(size_t(n));
   damping_.resize(size_t(n));
   forces_.resize(size_t(n));
   damped_forces_.resize(size_t(n));
@@ -141,11 +140,24 @@ void LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
     wrap_air_particles(wind_box_, wind_wo, air_x_wo_, air_v_wo_);
   }
 
-  const int substeps = std::max(1, params_.substeps);
-  const float dt = frame_dt / float(substeps);
-  for (int k = 0; k < substeps; k++) {
-    substep(dt, head_at((float(k) + 0.5f) / float(substeps)),
-            head_at(float(k + 1) / float(substeps)));
+  /* Springs are explicit: each substep is at most frame_dt / substeps and at most 1.8 / ω,
+   * ω² = 2 max_i Σ_j α_ij k_ij / m (Gershgorin bound; symplectic Euler is stable below
+   * 2 / ω). α grows as connections weaken, so ω is re-evaluated every substep. */
+  const float dt_max = frame_dt / float(std::max(1, params_.substeps));
+  float elapsed = 0.0f;
+  substeps_used_ = 0;
+  while (elapsed < frame_dt * (1.0f - 1e-5f) && substeps_used_ < 100000) {
+    compute_spring_coefficients(connections_, x_head_, cross_sections_, params_.h1,
+                                params_.young_modulus, k_, alpha_k_, side_sums_);
+    const float omega = std::sqrt(
+        2.0f * max_particle_stiffness(connections_, alpha_k_, is_root_) / mass_);
+    float dt = std::min(dt_max, frame_dt - elapsed);
+    if (std::isfinite(omega) && omega > 0.0f) {
+      dt = std::min(dt, 1.8f / omega);
+    }
+    substep(dt, head_at((elapsed + 0.5f * dt) / frame_dt), head_at((elapsed + dt) / frame_dt));
+    elapsed += dt;
+    substeps_used_++;
   }
   head_ = next;
   head_velocity_wo_ = velocity_wo;
@@ -166,13 +178,11 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   /* 3. Forces. */
   std::fill(forces_.begin(), forces_.end(), vec3(0.0f));
   std::fill(damped_forces_.begin(), damped_forces_.end(), vec3(0.0f));
-  std::fill(stiffness_.begin(), stiffness_.end(), 0.0f);
   std::fill(damping_.begin(), damping_.end(), 0.0f);
-  /* Springs: k_ij (eq. 7), α_ij (eq. 13-14), damped springs α_ij k_ij. */
-  compute_spring_coefficients(connections_, x_head_, cross_sections_, params_.h1,
-                              params_.young_modulus, k_, alpha_k_, side_sums_);
+  /* Springs: k_ij (eq. 7) and α_ij (eq. 13-14) were computed by step() for this state;
+   * damped springs α_ij k_ij. */
   accumulate_spring_forces(connections_, x_head_, v_head_, alpha_k_, params_.spring_damping,
-                           damped_forces_, stiffness_, damping_);
+                           forces_, damped_forces_, damping_);
   /* Hair-hair interactions, eq. 16-18. */
   const HairInteractionSettings interactions{params_.h2,
                                              params_.attraction_repulsion,
@@ -211,8 +221,8 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
                             glm::cross(w, glm::cross(w, x)) -
                             glm::cross(mid.angular_acceleration_head, x);
       const vec3 acceleration = forces_[size_t(i)] / m + gravity_head + inertial;
-      v += dt * acceleration +
-           dt * damped / (m + dt * damping + dt * dt * stiffness_[size_t(i)]);
+      /* The factor 2 bounds the damping of relative velocities too (Gershgorin on Σc). */
+      v += dt * acceleration + dt * damped / (m + 2.0f * dt * damping);
     }
   });
   parallel_for(n, 4096, [&](const IndexRange range) {
@@ -279,7 +289,7 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
     for (int64_t j = range.start; j < range.one_after_last(); j++) {
       vec3 &v = air_v_wo_[size_t(j)];
       v += dt * air_forces_[size_t(j)] / air_mass +
-           dt * air_damped_forces_[size_t(j)] / (air_mass + dt * air_damping_[size_t(j)]);
+           dt * air_damped_forces_[size_t(j)] / (air_mass + 2.0f * dt * air_damping_[size_t(j)]);
       air_x_wo_[size_t(j)] += dt * v;
     }
   });

@@ -9,11 +9,11 @@
  * relative to the head, whose motion enters as inertial forces. Inputs and outputs are in
  * world space.
  *
- * Integration: symplectic Euler. Forces that are linear in the positions or velocities
- * (springs, their damping, eq. 17-18, air friction, wind drag) are divided by the diagonal
- * m_i + Δt Σc + Δt² Σk of their backward-Euler matrix (a Jacobi step of implicit Euler), so
- * the stiff springs that keep E constant are stable at any substep count; equilibria are
- * unchanged. */
+ * Integration: symplectic Euler. The damping forces, linear in the velocities (spring
+ * damping, eq. 17-18, air friction, wind drag), are divided by m_i + Δt Σc, the diagonal of
+ * their backward-Euler matrix, so that no damping constant can make a step unstable; they
+ * vanish at rest, so equilibria are unchanged. The springs are explicit, and each frame
+ * takes at least as many substeps as their highest frequency needs. */
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
@@ -58,6 +58,8 @@ class LcpSolver {
   int64_t pairs_num() const { return connections_.size(); }
   /* Pairs of particles closer than h₂/2 (see count_close_pairs), after the last step. */
   int64_t interpenetrating_pairs_num() const { return interpenetrating_pairs_num_; }
+  /* Substeps of the last frame: params.substeps, or more when the springs need them. */
+  int substeps_used() const { return substeps_used_; }
 
   /* World space, after the last step. */
   Span<vec3> positions() const { return positions_wo_; }
@@ -112,7 +114,8 @@ class LcpSolver {
   /* Per step buffers. */
   SpatialGrid grid_;
   NeighborList neighbors_;
-  std::vector<float> density_, k_, alpha_k_, side_sums_, stiffness_, damping_;
+  std::vector<float> density_, k_, alpha_k_, side_sums_, damping_;
+  int substeps_used_ = 0;
   std::vector<vec3> forces_, damped_forces_;
 
   /* Wind. */

@@ -187,13 +187,14 @@ void compute_tensile_moduli(const LcpConnections &connections, const Span<float>
 
 void accumulate_spring_forces(const LcpConnections &connections, const Span<vec3> positions,
                               const Span<vec3> velocities, const Span<float> alpha_k,
-                              const float damping_time, const MutableSpan<vec3> r_forces,
-                              const MutableSpan<float> r_stiffness,
+                              const float damping_time,
+                              const MutableSpan<vec3> r_elastic_forces,
+                              const MutableSpan<vec3> r_damped_forces,
                               const MutableSpan<float> r_damping)
 {
   parallel_for(positions.size(), 1024, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      vec3 force(0.0f);
+      vec3 elastic(0.0f), damped(0.0f);
       float stiffness = 0.0f;
       for (int32_t k = connections.particle_offsets[size_t(i)];
            k < connections.particle_offsets[size_t(i) + 1]; k++)
@@ -214,14 +215,34 @@ void accumulate_spring_forces(const LcpConnections &connections, const Span<vec3
         /* Damped spring with coefficient α_ij k_ij (§3.3). */
         const float stretch = dist - connections.rest_length[size_t(p)];
         const float closing = glm::dot(velocities[j] - velocities[i], dir);
-        force += ak * (stretch + damping_time * closing) * dir;
+        elastic += ak * stretch * dir;
+        damped += ak * damping_time * closing * dir;
         stiffness += ak;
       }
-      r_forces[i] += force;
-      r_stiffness[i] += stiffness;
+      r_elastic_forces[i] += elastic;
+      r_damped_forces[i] += damped;
       r_damping[i] += damping_time * stiffness;
     }
   });
+}
+
+float max_particle_stiffness(const LcpConnections &connections, const Span<float> alpha_k,
+                             const Span<uint8_t> is_fixed)
+{
+  float result = 0.0f;
+  for (int64_t i = 0; i < is_fixed.size(); i++) {
+    if (is_fixed[i]) {
+      continue;
+    }
+    float sum = 0.0f;
+    for (int32_t k = connections.particle_offsets[size_t(i)];
+         k < connections.particle_offsets[size_t(i) + 1]; k++)
+    {
+      sum += alpha_k[connections.particle_pairs[size_t(k)] >> 1];
+    }
+    result = std::max(result, sum);
+  }
+  return result;
 }
 
 void update_directions(const LcpConnections &connections, const Span<vec3> positions,

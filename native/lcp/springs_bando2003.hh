@@ -52,12 +52,18 @@ void compute_tensile_moduli(const LcpConnections &connections, Span<float> alpha
                             Span<float> cross_sections, MutableSpan<float> r_modulus_root_side,
                             MutableSpan<float> r_modulus_tip_side);
 
-/* Damped spring forces f_i = Σ_j α_ij k_ij [(‖x_ij‖ − l_ij) + γ (v_ij · x̂_ij)] x̂_ij, with
- * their diagonal stiffness Σ α k and damping Σ γ α k added to r_stiffness and r_damping. */
+/* Damped springs (§3.3): the elastic part Σ_j α_ij k_ij (‖x_ij‖ − l_ij) x̂_ij goes to
+ * r_elastic_forces; the damping part Σ_j γ α_ij k_ij (v_ij · x̂_ij) x̂_ij to r_damped_forces,
+ * with its diagonal coefficient Σ_j γ α_ij k_ij added to r_damping. */
 void accumulate_spring_forces(const LcpConnections &connections, Span<vec3> positions,
                               Span<vec3> velocities, Span<float> alpha_k, float damping_time,
-                              MutableSpan<vec3> r_forces, MutableSpan<float> r_stiffness,
-                              MutableSpan<float> r_damping);
+                              MutableSpan<vec3> r_elastic_forces,
+                              MutableSpan<vec3> r_damped_forces, MutableSpan<float> r_damping);
+
+/* max_i Σ_j α_ij k_ij over the free particles: with the particle mass it bounds the highest
+ * spring frequency, ω² ≤ 2 max Σ α k / m (Gershgorin), which sets the explicit time step. */
+float max_particle_stiffness(const LcpConnections &connections, Span<float> alpha_k,
+                             Span<uint8_t> is_fixed);
 
 /* Eq. 15: t_i* = Σ_j α_ij k_ij t_i^j, t_i^j = x̂_ij turned by θ_ij toward t_i, normalised.
  * Particles flagged in `is_fixed` keep their direction. */
