@@ -41,5 +41,6 @@ py::array float3_view(Span<vec3> span, py::handle owner);
 
 void bind_groom(py::module_ &m);
 void bind_collision(py::module_ &m);
+void bind_lcp(py::module_ &m);
 
 }  // namespace hairdyn::bindings

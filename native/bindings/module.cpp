@@ -15,4 +15,5 @@ PYBIND11_MODULE(_native, m)
 
   bind_groom(m);
   bind_collision(m);
+  bind_lcp(m);
 }
