@@ -49,5 +49,6 @@ py::array int_view(Span<int32_t> span, py::handle owner);
 void bind_groom(py::module_ &m);
 void bind_collision(py::module_ &m);
 void bind_strands(py::module_ &m);
+void bind_lcp(py::module_ &m);
 
 }  // namespace hairdyn::bindings

@@ -16,4 +16,5 @@ PYBIND11_MODULE(_native, m)
   bind_groom(m);
   bind_collision(m);
   bind_strands(m);
+  bind_lcp(m);
 }

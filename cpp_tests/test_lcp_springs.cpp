@@ -1,0 +1,172 @@
+/* Loose connections of Bando 2003, §3.2-3.3: alignment (eq. 6), pruning, constant E (eq. 9-14),
+ * direction update (eq. 15). */
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "lcp/springs_bando2003.hh"
+
+using namespace hairdyn;
+
+namespace {
+
+/* A jittered block of hair along +Z: 7 × 7 × 16 particles of spacing a; the bottom layer is
+ * the roots. */
+struct Block {
+  std::vector<vec3> positions, directions;
+  std::vector<uint8_t> is_root;
+};
+
+Block hair_block(const float a)
+{
+  Block block;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> jitter(-0.1f * a, 0.1f * a);
+  for (int z = 0; z < 16; z++) {
+    for (int y = 0; y < 7; y++) {
+      for (int x = 0; x < 7; x++) {
+        block.positions.push_back(vec3(float(x), float(y), float(z)) * a +
+                                  vec3(jitter(rng), jitter(rng), jitter(rng)));
+        block.directions.push_back(vec3(0.0f, 0.0f, 1.0f));
+        block.is_root.push_back(z == 0 ? 1 : 0);
+      }
+    }
+  }
+  return block;
+}
+
+}  // namespace
+
+TEST(LcpSprings, AlignmentOfEq6)
+{
+  const vec3 z(0.0f, 0.0f, 1.0f);
+  EXPECT_NEAR(alignment(z, z, z * 0.01f), 1.0f, 1e-6f);      /* In a row. */
+  EXPECT_EQ(alignment(z, z, vec3(0.01f, 0.0f, 0.0f)), 0.0f); /* Side by side. */
+  EXPECT_EQ(alignment(z, -z, z * 0.01f), 0.0f);              /* Opposite hair. */
+  EXPECT_NEAR(alignment(z, z, vec3(1.0f, 0.0f, 1.0f)), std::sqrt(0.5f), 1e-6f);
+}
+
+TEST(LcpSprings, ConnectionsAreAlignedPrunedAndOriented)
+{
+  const float a = 0.01f;
+  const Block block = hair_block(a);
+  const LcpConnections c = build_connections(block.positions, block.directions, block.is_root,
+                                             1.3f * a, 0.5f, 12);
+  ASSERT_GT(c.size(), 0);
+  std::vector<int> degree(block.positions.size(), 0);
+  for (int64_t p = 0; p < c.size(); p++) {
+    const vec3 x = block.positions[size_t(c.tip[size_t(p)])] - block.positions[size_t(c.root[size_t(p)])];
+    EXPECT_GT(x.z, 0.0f) << "tip end must be nearer the hair tip";
+    EXPECT_LT(glm::length(x), 2.0f * 1.3f * a);
+    EXPECT_GE(c.strength[size_t(p)] / c.rest_length[size_t(p)], 0.5f - 1e-6f); /* a_ij ≥ a₀. */
+    EXPECT_FALSE(block.is_root[size_t(c.root[size_t(p)])] && block.is_root[size_t(c.tip[size_t(p)])]);
+    degree[size_t(c.root[size_t(p)])]++;
+    degree[size_t(c.tip[size_t(p)])]++;
+  }
+  /* Pruning: nobody keeps many more than N_n, unless its partners would drop below N_n. */
+  int above = 0;
+  for (const int d : degree) {
+    above += d > 12 ? 1 : 0;
+  }
+  EXPECT_LT(above, int(degree.size()) / 4);
+}
+
+TEST(LcpSprings, AlphaKeepsYoungsModulusConstantAsPairsMoveApart)
+{
+  const float a = 0.01f, h1 = 1.3f * a, E = 1e4f;
+  const Block block = hair_block(a);
+  const LcpConnections c = build_connections(block.positions, block.directions, block.is_root,
+                                             h1, 0.5f, 12);
+  const int64_t n = int64_t(block.positions.size());
+  const std::vector<float> area(size_t(n), cross_section(1e-5f, 1300.0f));
+  std::vector<float> k(size_t(c.size())), alpha_k(size_t(c.size())), sums(size_t(2 * n));
+  std::vector<float> e_root(static_cast<size_t>(n)), e_tip(static_cast<size_t>(n));
+  std::vector<float> rest_alpha;
+  for (const float stretch : {1.0f, 1.2f, 1.4f, 1.6f, 1.8f}) {
+    /* Pull the block apart along and across the hair: every pair weakens (eq. 7). */
+    std::vector<vec3> moved(block.positions);
+    for (vec3 &p : moved) {
+      p *= stretch;
+    }
+    compute_spring_coefficients(c, moved, area, h1, E, k, alpha_k, sums);
+    compute_tensile_moduli(c, alpha_k, area, e_root, e_tip);
+    /* Without the α scaling (α kept at its rest value) E would fall with k. */
+    if (rest_alpha.empty()) {
+      for (int64_t p = 0; p < c.size(); p++) {
+        rest_alpha.push_back(k[size_t(p)] > 0.0f ? alpha_k[size_t(p)] / k[size_t(p)] : 0.0f);
+      }
+    }
+    std::vector<float> unscaled(size_t(c.size()));
+    for (int64_t p = 0; p < c.size(); p++) {
+      unscaled[size_t(p)] = rest_alpha[size_t(p)] * k[size_t(p)];
+    }
+    std::vector<float> e_root_unscaled(static_cast<size_t>(n)), e_tip_unscaled(static_cast<size_t>(n));
+    compute_tensile_moduli(c, unscaled, area, e_root_unscaled, e_tip_unscaled);
+    double worst = 0.0, mean_deviation = 0.0, worst_eq13 = 0.0, unscaled_mean = 0.0;
+    int interior = 0;
+    for (int64_t i = 0; i < n; i++) {
+      const vec3 p = block.positions[size_t(i)] / a;
+      /* Interior particles: both groups N_r and N_t are full. */
+      if (p.x < 1.5f || p.x > 4.5f || p.y < 1.5f || p.y > 4.5f || p.z < 2.5f || p.z > 12.5f) {
+        continue;
+      }
+      interior++;
+      worst = std::max(worst, double(std::abs(e_root[size_t(i)] / E - 1.0f)));
+      worst = std::max(worst, double(std::abs(e_tip[size_t(i)] / E - 1.0f)));
+      mean_deviation += 0.5 * double(std::abs(e_root[size_t(i)] / E - 1.0f) +
+                                     std::abs(e_tip[size_t(i)] / E - 1.0f));
+      /* Eq. 13 alone: α_r,i = E A_i / Σ_{N_r(i)} l k makes eq. 10 hold exactly. */
+      for (int side = 0; side < 2; side++) {
+        const float sum_lk = sums[size_t(2 * i + side)];
+        const float alpha = E * area[size_t(i)] / sum_lk;
+        worst_eq13 = std::max(worst_eq13, double(std::abs(alpha * sum_lk / area[size_t(i)] / E - 1.0f)));
+      }
+      unscaled_mean += double(e_root_unscaled[size_t(i)] / E);
+    }
+    ASSERT_GT(interior, 20);
+    unscaled_mean /= interior;
+    mean_deviation /= interior;
+    EXPECT_LT(worst_eq13, 1e-5) << "stretch " << stretch;
+    /* Eq. 14 averages the α of the two ends, so E per particle is kept on average, not
+     * exactly: mean deviation under 10 %, none beyond 60 %. */
+    EXPECT_LT(mean_deviation, 0.1) << "stretch " << stretch;
+    EXPECT_LT(worst, 0.6) << "stretch " << stretch;
+    if (stretch >= 1.6f) {
+      EXPECT_LT(unscaled_mean, 0.6) << "the test would not notice a missing α";
+    }
+  }
+}
+
+TEST(LcpSprings, DirectionsFollowTheConnections)
+{
+  const float a = 0.01f;
+  const Block block = hair_block(a);
+  const LcpConnections c = build_connections(block.positions, block.directions, block.is_root,
+                                             1.3f * a, 0.5f, 12);
+  const int64_t n = int64_t(block.positions.size());
+  /* Rotate the whole block by 0.5 rad about X: eq. 15 turns every free direction with it. */
+  const mat3 turn = glm::mat3_cast(glm::angleAxis(0.5f, vec3(1.0f, 0.0f, 0.0f)));
+  std::vector<vec3> moved(block.positions);
+  for (vec3 &p : moved) {
+    p = turn * p;
+  }
+  const std::vector<float> area(size_t(n), cross_section(1e-5f, 1300.0f));
+  std::vector<float> k(size_t(c.size())), alpha_k(size_t(c.size())), sums(size_t(2 * n));
+  compute_spring_coefficients(c, moved, area, 1.3f * a, 1e4f, k, alpha_k, sums);
+  std::vector<vec3> directions(block.directions);
+  const std::vector<uint8_t> none(static_cast<size_t>(n), 0);
+  const vec3 expected = turn * vec3(0.0f, 0.0f, 1.0f);
+  /* One update turns every direction most of the way (from cos 0.5 = 0.88); repeated, as
+   * every substep does, eq. 15 reaches its fixed point, the turned direction. */
+  update_directions(c, moved, alpha_k, none, directions);
+  for (int64_t i = 0; i < n; i++) {
+    EXPECT_GT(glm::dot(directions[size_t(i)], expected), 0.94f) << i;
+  }
+  for (int iteration = 0; iteration < 30; iteration++) {
+    update_directions(c, moved, alpha_k, none, directions);
+  }
+  for (int64_t i = 0; i < n; i++) {
+    EXPECT_GT(glm::dot(directions[size_t(i)], expected), 0.995f) << i;
+  }
+}

@@ -1,0 +1,255 @@
+/* Bindings of native/lcp: loosely connected particles (Bando 2003). */
+#include "bindings/arrays.hh"
+#include "bindings/params.hh"
+
+#include "groom/groom.hh"
+#include "lcp/lcp_solver.hh"
+#include "lcp/sampling_bando2003.hh"
+#include "lcp/scalp_map_bando2003.hh"
+
+namespace hairdyn::bindings {
+
+namespace {
+
+void check_lcp_params(const LcpParams &params)
+{
+  if (!(params.h2 > 0.0f)) {
+    fail("h2 (h₂) must be greater than 0 m: it is the reach of the hair-hair interactions");
+  }
+  if (!(params.h1 > 0.0f)) {
+    fail("h1 (h₁) must be greater than 0 m: it is the reach of the connections");
+  }
+}
+
+/* (N, 2) float32 as vec2, all finite; empty when None. */
+Span<vec2> as_float2_or_empty(const py::handle obj, const char *name, const int64_t rows)
+{
+  if (obj.is_none()) {
+    return {};
+  }
+  const py::array array = check_array(obj, name, py::dtype::of<float>(), "float32", 2);
+  const Span<vec2> span(static_cast<const vec2 *>(array.data()), array.shape(0));
+  if (span.size() != rows) {
+    fail(std::string(name) + " must have one row per strand (" + std::to_string(rows) + ")");
+  }
+  for (const vec2 &v : span) {
+    if (!std::isfinite(v.x) || !std::isfinite(v.y)) {
+      fail(std::string(name) + " has a value that is not a finite number");
+    }
+  }
+  return span;
+}
+
+void check_scalp(const Span<vec3> vertices, const Span<ivec3> triangles)
+{
+  if (triangles.is_empty() || vertices.is_empty()) {
+    fail("No scalp: mark the part of the head that grows hair (the scalp patch has no faces).");
+  }
+  const std::string error = find_scalp_error(vertices, triangles);
+  if (!error.empty()) {
+    fail("Invalid scalp: " + error + ".");
+  }
+}
+
+py::dict particles_dict(LcpParticles &&particles)
+{
+  const int64_t n = particles.size();
+  py::array_t<float> positions({n, int64_t(3)}), directions({n, int64_t(3)});
+  py::array_t<float> u(n), v(n), s(n);
+  std::copy_n(reinterpret_cast<const float *>(particles.positions.data()), 3 * n, positions.mutable_data());
+  std::copy_n(reinterpret_cast<const float *>(particles.directions.data()), 3 * n, directions.mutable_data());
+  std::copy_n(particles.u.data(), n, u.mutable_data());
+  std::copy_n(particles.v.data(), n, v.mutable_data());
+  std::copy_n(particles.s.data(), n, s.mutable_data());
+  py::dict result;
+  result["positions"] = positions;
+  result["directions"] = directions;
+  result["u"] = u;
+  result["v"] = v;
+  result["s"] = s;
+  return result;
+}
+
+py::array float_view(const Span<float> span, const py::handle owner)
+{
+  py::array view(py::dtype::of<float>(), {span.size()}, {int64_t(sizeof(float))}, span.data(), owner);
+  view.attr("setflags")(py::arg("write") = false);
+  return view;
+}
+
+}  // namespace
+
+void bind_lcp(py::module_ &m)
+{
+  bind_params<LcpParams>(m, "LcpParams",
+                         "Loosely connected particles (Bando, Chen, Nishita 2003) parameters.");
+
+  m.def(
+      "harmonic_scalp_map",
+      [](const py::handle vertices, const py::handle triangles) {
+        const Span<vec3> v = as_float3(vertices, "vertices");
+        const Span<ivec3> t = as_int3(triangles, "triangles");
+        check_scalp(v, t);
+        py::array_t<float> uv({v.size(), int64_t(2)});
+        bool ok = false;
+        {
+          py::gil_scoped_release release;
+          ok = compute_harmonic_map(v, t, MutableSpan<vec2>(reinterpret_cast<vec2 *>(uv.mutable_data()), v.size()));
+        }
+        if (!ok) {
+          fail("The scalp's harmonic map could not be solved (degenerate triangles?).");
+        }
+        return uv;
+      },
+      py::arg("vertices"), py::arg("triangles"),
+      "(u, v) in the unit square for each scalp vertex (Bando 2003, §3.2): (V, 2) float32.");
+
+  m.def(
+      "sample_lcp_particles",
+      [](const LcpParams &params, const py::handle vertices_wo, const py::handle triangles,
+         const py::handle length_weights, const py::handle length_image) {
+        check_lcp_params(params);
+        const Span<vec3> v = as_float3(vertices_wo, "scalp_vertices");
+        const Span<ivec3> t = as_int3(triangles, "scalp_triangles");
+        check_scalp(v, t);
+        Span<float> weights;
+        if (!length_weights.is_none()) {
+          weights = as_float(length_weights, "length_weights");
+          if (weights.size() != v.size()) {
+            fail("length_weights must have one value per scalp vertex");
+          }
+        }
+        LengthMap length;
+        py::array image_array;
+        if (!length_image.is_none()) {
+          image_array = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(length_image);
+          if (!image_array || image_array.ndim() != 2 || image_array.size() == 0) {
+            fail("length_image must be a 2D array of grey values (rows from v = 0)");
+          }
+          length.image = Span<float>(static_cast<const float *>(image_array.data()), image_array.size());
+          length.image_height = image_array.shape(0);
+          length.image_width = image_array.shape(1);
+        }
+        LcpParticles particles;
+        std::string error;
+        {
+          py::gil_scoped_release release;
+          const ScalpMap scalp(v, t, weights);
+          error = scalp.is_valid() ? find_length_map_error(scalp, length) :
+                                     "the scalp's harmonic map could not be solved";
+          if (error.empty()) {
+            particles = sample_scalp_particles(scalp, length, params, vec3(0.0f, 0.0f, -1.0f));
+          }
+        }
+        if (!error.empty()) {
+          fail("Invalid length map or scalp: " + error + ".");
+        }
+        if (particles.size() == 0) {
+          fail("No particles: the particle spacing is too large for this scalp and length map.");
+        }
+        return particles_dict(std::move(particles));
+      },
+      py::arg("params"), py::arg("scalp_vertices"), py::arg("scalp_triangles"),
+      py::arg("length_weights") = py::none(), py::arg("length_image") = py::none(),
+      "Poisson-disc particles over a world-space scalp (Bando 2003, §3.2): a dict of positions, "
+      "directions (N, 3) and u, v, s (N,) float32; s < 0 are the fixed root particles.");
+
+  m.def(
+      "lcp_particles_from_groom",
+      [](const LcpParams &params, const py::handle curve_offsets, const py::handle positions,
+         const py::handle root_uv) {
+        check_lcp_params(params);
+        const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+        const Span<vec3> points = as_float3(positions, "positions");
+        check_groom(offsets, points);
+        const Span<vec2> uv = as_float2_or_empty(root_uv, "root_uv", offsets.size() - 1);
+        LcpParticles particles;
+        {
+          py::gil_scoped_release release;
+          particles = sample_groom_particles(offsets, points, uv, params);
+        }
+        if (particles.size() == 0) {
+          fail("No particles: the strands are shorter than the particle spacing.");
+        }
+        return particles_dict(std::move(particles));
+      },
+      py::arg("params"), py::arg("curve_offsets"), py::arg("positions"),
+      py::arg("root_uv") = py::none(),
+      "Particles sampled along an existing groom (u, v from the roots, s from arc length).");
+
+  py::class_<LcpSolver>(m, "LcpSolver", "Loosely connected particles (Bando 2003).")
+      .def(py::init([](const LcpParams &params, const py::handle positions_wo,
+                       const py::handle directions_wo, const py::handle u, const py::handle v,
+                       const py::handle s, const py::handle head_to_world_rest) {
+             check_lcp_params(params);
+             LcpParticles particles;
+             const Span<vec3> x = as_float3(positions_wo, "positions");
+             const Span<vec3> t = as_float3(directions_wo, "directions");
+             const Span<float> su = as_float(u, "u"), sv = as_float(v, "v"), ss = as_float(s, "s");
+             if (x.is_empty()) {
+               fail("No particles: sample the hair volume first (zero particles given).");
+             }
+             if (t.size() != x.size() || su.size() != x.size() || sv.size() != x.size() ||
+                 ss.size() != x.size())
+             {
+               fail("positions, directions, u, v and s must have the same length");
+             }
+             for (const vec3 &d : t) {
+               if (glm::length(d) < 1e-6f) {
+                 fail("directions must be non-zero vectors");
+               }
+             }
+             const mat4 head = as_matrix(head_to_world_rest, "head_to_world_rest");
+             particles.positions.assign(x.begin(), x.end());
+             particles.directions.assign(t.begin(), t.end());
+             particles.u.assign(su.begin(), su.end());
+             particles.v.assign(sv.begin(), sv.end());
+             particles.s.assign(ss.begin(), ss.end());
+             py::gil_scoped_release release;
+             return new LcpSolver(params, particles, head);
+           }),
+           py::arg("params"), py::arg("positions"), py::arg("directions"), py::arg("u"),
+           py::arg("v"), py::arg("s"), py::arg("head_to_world_rest"))
+      .def(
+          "step",
+          [](LcpSolver &self, const float frame_dt, const py::handle head_to_world) {
+            if (!(frame_dt > 0.0f) || !std::isfinite(frame_dt)) {
+              fail("frame_dt must be a positive number of seconds");
+            }
+            const mat4 head = as_matrix(head_to_world, "head_to_world");
+            py::gil_scoped_release release;
+            self.step(frame_dt, head);
+          },
+          py::arg("frame_dt"), py::arg("head_to_world"),
+          "Advance one frame of frame_dt seconds to the head's transform.")
+      .def("reset", &LcpSolver::reset, py::call_guard<py::gil_scoped_release>())
+      .def_property_readonly("particles_num", &LcpSolver::particles_num)
+      .def_property_readonly("pairs_num", &LcpSolver::pairs_num)
+      .def_property_readonly("interpenetrating_pairs_num", &LcpSolver::interpenetrating_pairs_num,
+                             "Particle pairs closer than h₂/2 after the last step.")
+      .def_property_readonly("substeps_used", &LcpSolver::substeps_used)
+      .def_property_readonly("particle_mass", &LcpSolver::particle_mass)
+      .def_property_readonly("positions", [](py::object self) {
+        return float3_view(self.cast<LcpSolver &>().positions(), self);
+      })
+      .def_property_readonly("directions", [](py::object self) {
+        return float3_view(self.cast<LcpSolver &>().directions(), self);
+      })
+      .def_property_readonly("velocities", [](py::object self) {
+        return float3_view(self.cast<LcpSolver &>().velocities(), self);
+      })
+      .def_property_readonly("density", [](py::object self) {
+        return float_view(self.cast<LcpSolver &>().density(), self);
+      })
+      .def_property_readonly("u", [](py::object self) { return float_view(self.cast<LcpSolver &>().u(), self); })
+      .def_property_readonly("v", [](py::object self) { return float_view(self.cast<LcpSolver &>().v(), self); })
+      .def_property_readonly("s", [](py::object self) { return float_view(self.cast<LcpSolver &>().s(), self); })
+      .def_property_readonly("air_positions", [](py::object self) {
+        return float3_view(self.cast<LcpSolver &>().air_positions(), self);
+      })
+      .def_property_readonly("air_velocities", [](py::object self) {
+        return float3_view(self.cast<LcpSolver &>().air_velocities(), self);
+      });
+}
+
+}  // namespace hairdyn::bindings

@@ -1,0 +1,119 @@
+#include "core/spatial_grid.hh"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.hh"
+
+namespace hairdyn {
+
+static int32_t cell_coordinate(const float x, const float cell_size)
+{
+  /* Clamped so that exploded (but finite) states still hash instead of overflowing. */
+  const float c = std::floor(x / cell_size);
+  return int32_t(std::clamp(c, -1.0e9f, 1.0e9f));
+}
+
+uint32_t SpatialGrid::bucket_of_cell(const int32_t x, const int32_t y, const int32_t z) const
+{
+  /* Teschner et al. 2003 spatial hash. */
+  const uint32_t h = (uint32_t(x) * 73856093u) ^ (uint32_t(y) * 19349663u) ^
+                     (uint32_t(z) * 83492791u);
+  return h & bucket_mask_;
+}
+
+void SpatialGrid::build(const Span<vec3> points, const float cell_size)
+{
+  assert(cell_size > 0.0f);
+  points_ = points;
+  cell_size_ = cell_size;
+  uint32_t buckets_num = 64;
+  while (buckets_num < uint32_t(2 * points.size()) && buckets_num < (1u << 30)) {
+    buckets_num <<= 1;
+  }
+  bucket_mask_ = buckets_num - 1;
+
+  point_buckets_.resize(size_t(points.size()));
+  parallel_for(points.size(), 4096, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      const vec3 &p = points[i];
+      point_buckets_[size_t(i)] = bucket_of_cell(cell_coordinate(p.x, cell_size),
+                                                 cell_coordinate(p.y, cell_size),
+                                                 cell_coordinate(p.z, cell_size));
+    }
+  });
+  /* Counting sort by bucket: stable, so indices inside a bucket stay in increasing order. */
+  bucket_offsets_.assign(size_t(buckets_num) + 1, 0);
+  for (const uint32_t b : point_buckets_) {
+    bucket_offsets_[b + 1]++;
+  }
+  for (size_t b = 0; b < buckets_num; b++) {
+    bucket_offsets_[b + 1] += bucket_offsets_[b];
+  }
+  sorted_indices_.resize(size_t(points.size()));
+  std::vector<int32_t> &fill = sorted_indices_;
+  std::vector<int32_t> cursor(bucket_offsets_.begin(), bucket_offsets_.end() - 1);
+  for (int64_t i = 0; i < points.size(); i++) {
+    fill[size_t(cursor[point_buckets_[size_t(i)]]++)] = int32_t(i);
+  }
+}
+
+int SpatialGrid::neighbor_buckets(const vec3 &p, int32_t r_buckets[27]) const
+{
+  const int32_t cx = cell_coordinate(p.x, cell_size_);
+  const int32_t cy = cell_coordinate(p.y, cell_size_);
+  const int32_t cz = cell_coordinate(p.z, cell_size_);
+  int n = 0;
+  for (int32_t dz = -1; dz <= 1; dz++) {
+    for (int32_t dy = -1; dy <= 1; dy++) {
+      for (int32_t dx = -1; dx <= 1; dx++) {
+        r_buckets[n++] = int32_t(bucket_of_cell(cx + dx, cy + dy, cz + dz));
+      }
+    }
+  }
+  /* Two cells may share a bucket: visit each bucket once. */
+  std::sort(r_buckets, r_buckets + n);
+  return int(std::unique(r_buckets, r_buckets + n) - r_buckets);
+}
+
+void find_neighbors(const SpatialGrid &grid, const Span<vec3> query_points, const float radius,
+                    const bool exclude_self, NeighborList &r_list)
+{
+  assert(radius <= grid.cell_size() * 1.0001f);
+  const int64_t size = query_points.size();
+  const int64_t grain = 512;
+  const int64_t chunks_num = std::max<int64_t>(1, (size + grain - 1) / grain);
+  r_list.offsets.assign(size_t(size) + 1, 0);
+  if (int64_t(r_list.chunk_indices.size()) < chunks_num) {
+    r_list.chunk_indices.resize(size_t(chunks_num));
+  }
+  parallel_for(size, grain, [&](const IndexRange range) {
+    std::vector<int32_t> &chunk = r_list.chunk_indices[size_t(range.start / grain)];
+    chunk.clear();
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      const size_t before = chunk.size();
+      grid.for_each_in_radius(query_points[i], radius, [&](const int32_t j) {
+        if (!(exclude_self && j == i)) {
+          chunk.push_back(j);
+        }
+      });
+      r_list.offsets[size_t(i) + 1] = int32_t(chunk.size() - before);
+    }
+  });
+  for (int64_t i = 0; i < size; i++) {
+    r_list.offsets[size_t(i) + 1] += r_list.offsets[size_t(i)];
+  }
+  r_list.indices.resize(size_t(r_list.offsets[size_t(size)]));
+  parallel_for(chunks_num, 1, [&](const IndexRange range) {
+    for (int64_t c = range.start; c < range.one_after_last(); c++) {
+      if (c * grain >= size) {
+        continue;
+      }
+      const std::vector<int32_t> &chunk = r_list.chunk_indices[size_t(c)];
+      std::copy(chunk.begin(), chunk.end(),
+                r_list.indices.begin() + r_list.offsets[size_t(c * grain)]);
+    }
+  });
+}
+
+}  // namespace hairdyn

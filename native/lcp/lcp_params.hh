@@ -1,0 +1,146 @@
+#pragma once
+/* Parameters of loosely connected particles (Bando, Chen, Nishita 2003). Defaults suit a
+ * human head in metres (head radius ~0.1 m, hair 0.1-0.3 m, ~2,000 particles). Each field's
+ * comment gives the unit and the paper's symbol. */
+#include "core/params.hh"
+
+namespace hairdyn {
+
+struct LcpParams {
+  /* ---- initialisation (§3.2) ---- */
+  float particle_spacing = 0.012f; /* m, r: Poisson-disc radius in the distance of eq. 3. */
+  int32_t particle_num = 0;        /* N: target particle count; 0 = as many as `r` allows. */
+  float root_depth = 0.01f;        /* m, s_r: depth of the hair roots beneath the scalp. */
+  float max_length = 0.25f;        /* m, L_max: scales the length map L(u, v). */
+  float root_tangent_weight = 0.3f; /* w_t of eq. 4: tilts roots away from the whorl. */
+  float root_normal_weight = 1.0f;  /* w_n of eq. 4: weight of the scalp normal. */
+  float whorl_u = 0.5f;             /* u of the whorl centre on the scalp (eq. 4's n_w). */
+  float whorl_v = 0.5f;             /* v of the whorl centre. */
+  float beam_length = 0.06f; /* m, b = (EI / (λg))^(1/3): bending length of Anjyo's cantilever. */
+  int32_t seed = 0;          /* Random seed of the Poisson-disc sampling. */
+
+  /* ---- connections and hair dynamics (§3.2-3.3) ---- */
+  float h1 = 0.016f;       /* m, h₁: smoothing length of the connections (pairs within 2h₁). */
+  float a0 = 0.5f;         /* a₀: pairs less aligned than this (eq. 6) are not connected. */
+  int32_t neighbor_num = 12; /* N_n: connections kept per particle. */
+  float young_modulus = 1.0e4f; /* Pa, E: tensile modulus kept constant (eq. 10-11). */
+  float material_density = 1300.0f; /* kg/m³, δ: density of the hair material (eq. 9). */
+  float spring_damping = 0.005f; /* s, γ: spring damping, force γ·αk·(v_ij·x̂_ij). */
+  float hair_density = 10.0f; /* kg/m³, ρ_h: mass of hair per volume of hair; sets m_i. */
+
+  /* ---- hair-hair interactions (§3.4) ---- */
+  float h2 = 0.011f;              /* m, h₂: smoothing length of the interactions. */
+  bool attraction_repulsion = true; /* Apply eq. 16. */
+  float pressure_stiffness = 0.05f; /* m²/s², k_a: P = k_a (ρ − ρ₀) of eq. 16. */
+  float rest_density = 8.0f;      /* kg/m³, ρ₀: small = repulsive, large = cohesive. */
+  bool hair_collision = true;     /* Apply eq. 17. */
+  float collision_damping = 60.0f; /* 1/s, d_c: damping of approaching hair (eq. 17). */
+  bool hair_friction = true;      /* Apply eq. 18. */
+  float friction_damping = 10.0f; /* 1/s, d_f: damping of sliding hair (eq. 18). */
+
+  /* ---- other forces (§3.5) ---- */
+  float gravity = 9.81f;      /* m/s², g: along world −Z (Blender is Z-up). */
+  float air_friction = 2.0f;  /* 1/s: damping force −(this)·m·v against still air. */
+  float wind_speed = 0.0f;    /* m/s: free-stream speed of the air particles; 0 = no wind. */
+  float wind_heading = 0.0f;  /* rad: horizontal direction the wind blows to (0 = +X). */
+  float wind_particle_spacing = 0.03f; /* m: spacing of the SPH air particles. */
+  float wind_drag = 20.0f;    /* 1/s, k_d: hair-air drag rate, both ways. */
+  float air_density = 1.2f;   /* kg/m³: density of the air particles. */
+  float body_friction = 0.3f; /* μ: Coulomb friction of hair on the body. */
+  int32_t substeps = 8;       /* Time steps per frame. */
+
+  template<typename Fn> static void for_each_field(Fn &&fn)
+  {
+    fn(&LcpParams::particle_spacing,
+       ParamInfo{"particle_spacing", "r", "m", 1e-4, 1.0,
+                 "Poisson-disc radius of the particles in the (u, v, s) distance of eq. 3"});
+    fn(&LcpParams::particle_num,
+       ParamInfo{"particle_num", "N", "", 0, 10000000,
+                 "Target particle count (0: as many as the spacing allows)"});
+    fn(&LcpParams::root_depth,
+       ParamInfo{"root_depth", "s_r", "m", 0.0, 1.0,
+                 "Depth of the fixed root particles beneath the scalp (§3.2)"});
+    fn(&LcpParams::max_length,
+       ParamInfo{"max_length", "L_max", "m", 1e-4, 10.0,
+                 "Hair length where the length map is 1 (§3.2)"});
+    fn(&LcpParams::root_tangent_weight,
+       ParamInfo{"root_tangent_weight", "w_t", "", 0.0, 100.0,
+                 "Tangent weight of the root direction, eq. 4 (large: hair lies down)"});
+    fn(&LcpParams::root_normal_weight,
+       ParamInfo{"root_normal_weight", "w_n", "", 0.0, 100.0,
+                 "Normal weight of the root direction, eq. 4"});
+    fn(&LcpParams::whorl_u, ParamInfo{"whorl_u", "u_w", "", 0.0, 1.0,
+                                      "u of the hair whorl centre on the scalp (eq. 4)"});
+    fn(&LcpParams::whorl_v, ParamInfo{"whorl_v", "v_w", "", 0.0, 1.0,
+                                      "v of the hair whorl centre on the scalp (eq. 4)"});
+    fn(&LcpParams::beam_length,
+       ParamInfo{"beam_length", "b", "m", 1e-3, 100.0,
+                 "Bending length (EI/λg)^(1/3) of the cantilever-beam initial shape (Anjyo 1992)"});
+    fn(&LcpParams::seed, ParamInfo{"seed", "", "", 0, 2147483647,
+                                   "Random seed of the Poisson-disc sampling"});
+    fn(&LcpParams::h1,
+       ParamInfo{"h1", "h₁", "m", 1e-5, 1.0,
+                 "Smoothing length of the connections: pairs within 2h₁ at rest (eq. 7)"});
+    fn(&LcpParams::a0, ParamInfo{"a0", "a₀", "", 0.0, 1.0,
+                                 "Alignment threshold: pairs with a_ij < a₀ are dropped (eq. 6)"});
+    fn(&LcpParams::neighbor_num,
+       ParamInfo{"neighbor_num", "N_n", "", 1, 1000,
+                 "Connections kept per particle, strongest c_ij W(l_ij, h₁) first (§3.2)"});
+    fn(&LcpParams::young_modulus,
+       ParamInfo{"young_modulus", "E", "Pa", 0.0, 1e12,
+                 "Tensile Young's modulus kept constant per particle (eq. 10-14)"});
+    fn(&LcpParams::material_density,
+       ParamInfo{"material_density", "δ", "kg/m³", 1.0, 1e5,
+                 "Density of the hair material, giving the cross-section A_i (eq. 9)"});
+    fn(&LcpParams::spring_damping,
+       ParamInfo{"spring_damping", "γ", "s", 0.0, 10.0,
+                 "Damping of the springs: force γ·α_ij k_ij·(v_ij·x̂_ij) (§3.3)"});
+    fn(&LcpParams::hair_density,
+       ParamInfo{"hair_density", "ρ_h", "kg/m³", 1e-3, 1e4,
+                 "Mass of hair per volume of the hair region; sets the particle mass m_i"});
+    fn(&LcpParams::h2, ParamInfo{"h2", "h₂", "m", 1e-5, 1.0,
+                                 "Smoothing length of hair-hair interactions (eq. 1, 16-18)"});
+    fn(&LcpParams::attraction_repulsion,
+       ParamInfo{"attraction_repulsion", "", "", 0, 1, "Apply attraction/repulsion (eq. 16)"});
+    fn(&LcpParams::pressure_stiffness,
+       ParamInfo{"pressure_stiffness", "k_a", "m²/s²", 0.0, 1e4,
+                 "Magnitude of the attraction/repulsion, P = k_a(ρ − ρ₀) (eq. 16)"});
+    fn(&LcpParams::rest_density,
+       ParamInfo{"rest_density", "ρ₀", "kg/m³", 0.0, 1e5,
+                 "Average hair density kept by eq. 16: small is repulsive, large cohesive"});
+    fn(&LcpParams::hair_collision,
+       ParamInfo{"hair_collision", "", "", 0, 1, "Apply inelastic hair-hair collision (eq. 17)"});
+    fn(&LcpParams::collision_damping,
+       ParamInfo{"collision_damping", "d_c", "1/s", 0.0, 1e6,
+                 "Collision damping constant of eq. 17 (per unit SPH volume)"});
+    fn(&LcpParams::hair_friction,
+       ParamInfo{"hair_friction", "", "", 0, 1, "Apply hair-hair friction (eq. 18)"});
+    fn(&LcpParams::friction_damping,
+       ParamInfo{"friction_damping", "d_f", "1/s", 0.0, 1e6,
+                 "Frictional damping constant of eq. 18 (per unit SPH volume)"});
+    fn(&LcpParams::gravity, ParamInfo{"gravity", "g", "m/s²", 0.0, 1000.0,
+                                      "Gravity along world −Z (§3.5)"});
+    fn(&LcpParams::air_friction,
+       ParamInfo{"air_friction", "", "1/s", 0.0, 1e4,
+                 "Air friction: damping force proportional to velocity (§3.5)"});
+    fn(&LcpParams::wind_speed, ParamInfo{"wind_speed", "", "m/s", 0.0, 100.0,
+                                         "Free-stream speed of the SPH wind (§3.5); 0 = none"});
+    fn(&LcpParams::wind_heading,
+       ParamInfo{"wind_heading", "", "rad", -7.0, 7.0,
+                 "Horizontal direction the wind blows to, from +X toward +Y"});
+    fn(&LcpParams::wind_particle_spacing,
+       ParamInfo{"wind_particle_spacing", "", "m", 1e-3, 1.0,
+                 "Spacing (and smoothing length) of the air particles"});
+    fn(&LcpParams::wind_drag,
+       ParamInfo{"wind_drag", "k_d", "1/s", 0.0, 1e5,
+                 "Drag between hair and air particles, acting on both (§3.5)"});
+    fn(&LcpParams::air_density, ParamInfo{"air_density", "", "kg/m³", 1e-3, 1e3,
+                                          "Density of the air particles"});
+    fn(&LcpParams::body_friction,
+       ParamInfo{"body_friction", "μ", "", 0.0, 10.0,
+                 "Coulomb friction coefficient of hair sliding on the body (§3.5)"});
+    fn(&LcpParams::substeps, ParamInfo{"substeps", "", "", 1, 1000, "Time steps per frame"});
+  }
+};
+
+}  // namespace hairdyn

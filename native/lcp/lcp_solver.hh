@@ -1,0 +1,137 @@
+#pragma once
+/* Loosely connected particles (Bando, Chen, Nishita 2003): the solver owns the particle
+ * state and runs the paper's loop (§3.1) in a straight-line step():
+ *   1. neighbour search (uniform grid, 2h₂)      2. density, eq. 1
+ *   3. forces: springs eq. 7-14, interactions eq. 16-18, gravity, air friction, wind,
+ *      inertia of the head's frame (§3.5)        4. integrate, then body collisions
+ *   5. hair directions, eq. 15.
+ * The equations of motion are written in the head's frame: positions and velocities are
+ * relative to the head, whose motion enters as inertial forces. Inputs and outputs are in
+ * world space.
+ *
+ * Integration: symplectic Euler. The damping forces, linear in the velocities (spring
+ * damping, eq. 17-18, air friction, wind drag), are divided by m_i + Δt Σc, the diagonal of
+ * their backward-Euler matrix, so that no damping constant can make a step unstable; they
+ * vanish at rest, so equilibria are unchanged. The springs are explicit, and each frame
+ * takes at least as many substeps as their highest frequency needs. */
+#include <vector>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "core/math.hh"
+#include "core/span.hh"
+#include "core/spatial_grid.hh"
+#include "lcp/body_collision_bando2003.hh"
+#include "lcp/lcp_params.hh"
+#include "lcp/sampling_bando2003.hh"
+#include "lcp/springs_bando2003.hh"
+#include "lcp/wind_bando2003.hh"
+
+namespace hairdyn {
+
+/* The rigid part of an object-to-world matrix (scale removed). */
+struct RigidTransform {
+  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+  vec3 translation{0.0f};
+
+  mat3 matrix() const { return glm::mat3_cast(rotation); }
+};
+RigidTransform rigid_part(const mat4 &m);
+
+class LcpSolver {
+ public:
+  /* `particles_wo`: positions and directions in world space with the head at
+   * `head_to_world_rest`; s < 0 marks root particles, fixed to the head. */
+  LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
+            const mat4 &head_to_world_rest);
+
+  /* Advances one frame of `frame_dt` seconds to the head transform `head_to_world` (the
+   * head's motion is interpolated over the substeps). */
+  void step(float frame_dt, const mat4 &head_to_world);
+  /* Back to the rest state and the rest head transform; the wind starts over. */
+  void reset();
+  /* Body collisions (see lcp/body_collision_bando2003.hh); an empty query turns them off. */
+  void set_body_contact(LcpContactQuery query) { contact_query_ = std::move(query); }
+
+  const LcpParams &params() const { return params_; }
+  int64_t particles_num() const { return int64_t(x_head_.size()); }
+  int64_t pairs_num() const { return connections_.size(); }
+  /* Pairs of particles closer than h₂/2 (see count_close_pairs), after the last step. */
+  int64_t interpenetrating_pairs_num() const { return interpenetrating_pairs_num_; }
+  /* Substeps of the last frame: params.substeps, or more when the springs need them. */
+  int substeps_used() const { return substeps_used_; }
+
+  /* World space, after the last step. */
+  Span<vec3> positions() const { return positions_wo_; }
+  Span<vec3> directions() const { return directions_wo_; }
+  Span<vec3> velocities() const { return velocities_wo_; }
+  Span<float> density() const { return density_; }
+  Span<float> u() const { return u_; }
+  Span<float> v() const { return v_; }
+  Span<float> s() const { return s_; }
+  Span<uint8_t> is_root() const { return is_root_; }
+  float particle_mass() const { return mass_; }
+
+  /* Air particles of the wind (world space). */
+  Span<vec3> air_positions() const { return air_x_wo_; }
+  Span<vec3> air_velocities() const { return air_v_wo_; }
+
+  /* Internals for tests: the connections and the current α_ij k_ij. */
+  const LcpConnections &connections() const { return connections_; }
+  Span<float> alpha_k() const { return alpha_k_; }
+  Span<float> cross_sections() const { return cross_sections_; }
+
+ private:
+  struct HeadState {
+    mat3 rotation;     /* Head to world, at the time the quantity applies. */
+    vec3 translation;
+    vec3 velocity_wo;  /* Of the head frame's origin. */
+    vec3 omega_head;   /* Angular velocity, head components. */
+    vec3 acceleration_head;
+    vec3 angular_acceleration_head;
+  };
+  void substep(float dt, const HeadState &mid, const HeadState &end);
+  void accumulate_wind(float dt, const HeadState &mid);
+  void collide_with_body(const HeadState &end);
+  void update_world_outputs(const HeadState &head);
+  void count_interpenetrations();
+
+  LcpParams params_;
+  RigidTransform head_rest_;
+  /* Rest state, head frame. */
+  std::vector<vec3> x_rest_head_, t_rest_head_;
+  std::vector<float> u_, v_, s_;
+  std::vector<uint8_t> is_root_;
+  float mass_ = 0.0f;
+  std::vector<float> masses_, cross_sections_;
+  LcpConnections connections_;
+
+  /* State, head frame. */
+  std::vector<vec3> x_head_, v_head_, t_head_;
+  RigidTransform head_;
+  vec3 head_velocity_wo_{0.0f}, head_omega_wo_{0.0f};
+
+  /* Per step buffers. */
+  SpatialGrid grid_;
+  NeighborList neighbors_;
+  std::vector<float> density_, k_, alpha_k_, side_sums_, damping_;
+  int substeps_used_ = 0;
+  std::vector<vec3> forces_, damped_forces_;
+
+  /* Wind. */
+  WindBox wind_box_;
+  std::vector<vec3> air_x_wo_, air_v_wo_, air_forces_, air_damped_forces_;
+  std::vector<float> air_density_, air_damping_, air_volumes_;
+  std::vector<vec3> hair_x_wo_, hair_v_wo_, hair_drag_wo_;
+  std::vector<float> hair_drag_damping_;
+  SpatialGrid air_grid_, hair_grid_wo_;
+  NeighborList air_neighbors_, hair_to_air_, air_to_hair_;
+
+  LcpContactQuery contact_query_;
+
+  /* Outputs. */
+  std::vector<vec3> positions_wo_, directions_wo_, velocities_wo_;
+  int64_t interpenetrating_pairs_num_ = 0;
+};
+
+}  // namespace hairdyn

@@ -1,0 +1,361 @@
+#include "lcp/sampling_bando2003.hh"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <sstream>
+#include <unordered_map>
+
+#include "groom/groom.hh"
+
+namespace hairdyn {
+
+float LengthMap::sample(const ScalpPoint &point, const vec2 &uv) const
+{
+  if (image.is_empty()) {
+    return std::clamp(point.weight, 0.0f, 1.0f);
+  }
+  const float x = std::clamp(uv.x, 0.0f, 1.0f) * float(image_width - 1);
+  const float y = std::clamp(uv.y, 0.0f, 1.0f) * float(image_height - 1);
+  const int64_t x0 = std::min(int64_t(x), image_width - 1), y0 = std::min(int64_t(y), image_height - 1);
+  const int64_t x1 = std::min(x0 + 1, image_width - 1), y1 = std::min(y0 + 1, image_height - 1);
+  const float fx = x - float(x0), fy = y - float(y0);
+  const auto at = [&](const int64_t col, const int64_t row) { return image[row * image_width + col]; };
+  const float value = (1.0f - fy) * ((1.0f - fx) * at(x0, y0) + fx * at(x1, y0)) +
+                      fy * ((1.0f - fx) * at(x0, y1) + fx * at(x1, y1));
+  return std::clamp(value, 0.0f, 1.0f);
+}
+
+std::string find_length_map_error(const ScalpMap &scalp, const LengthMap &length)
+{
+  if (!length.image.is_empty()) {
+    if (length.image_width < 1 || length.image_height < 1 ||
+        length.image_width * length.image_height != length.image.size())
+    {
+      return "the length map image has the wrong size";
+    }
+    for (const float value : length.image) {
+      if (value > 0.0f) {
+        return {};
+      }
+    }
+    return "the length map is empty (all zero): no hair would grow";
+  }
+  const Span<ivec3> triangles = scalp.triangles();
+  for (int64_t t = 0; t < triangles.size(); t++) {
+    vec2 uv;
+    const ScalpPoint p = scalp.point_in_triangle(t, vec3(1.0f / 3.0f), uv);
+    if (p.weight > 0.0f && scalp.triangle_areas()[t] > 0.0f) {
+      return {};
+    }
+  }
+  return "the length map is empty (all weights are zero): no hair would grow";
+}
+
+vec3 root_direction(const vec3 &normal, const vec3 &whorl_normal, const float w_t,
+                    const float w_n)
+{
+  /* Bando 2003, eq. 4: t_r = −w_t {n_w − (n_w·n) n} + w_n n, then normalised. */
+  const vec3 t = -w_t * (whorl_normal - glm::dot(whorl_normal, normal) * normal) + w_n * normal;
+  const float len = glm::length(t);
+  return len > 1e-8f ? t / len : normal;
+}
+
+void cantilever_beam(const vec3 &root, const vec3 &root_dir, const vec3 &gravity_dir,
+                     const float length, const float s, const float bending_length,
+                     vec3 &r_position, vec3 &r_direction)
+{
+  /* Anjyo et al. 1992: the hair is a cantilever beam clamped at the root. At arc length σ the
+   * bending moment is the weight of the remaining hair (length ℓ = L − σ, taken straight
+   * along the current direction) times its lever arm, M = λ g ℓ² sin φ / 2, where φ is the
+   * angle between the hair and gravity. The curvature M / EI = ℓ² sin φ / (2 b³) turns the
+   * direction toward gravity; integrate from the root to s. */
+  vec3 x = root;
+  vec3 t = root_dir;
+  const float b3 = bending_length * bending_length * bending_length;
+  const int steps = std::max(1, int(std::ceil(s / std::max(length, 1e-6f) * 64.0f)));
+  const float ds = s / float(steps);
+  for (int k = 0; k < steps; k++) {
+    const float sigma = (float(k) + 0.5f) * ds;
+    const float remaining = std::max(length - sigma, 0.0f);
+    const vec3 g_perp = gravity_dir - glm::dot(gravity_dir, t) * t;
+    const float sin_phi = glm::length(g_perp);
+    const float turn = remaining * remaining * sin_phi / (2.0f * b3) * ds;
+    const float half_turn = 0.5f * std::min(turn, std::asin(std::min(sin_phi, 1.0f)));
+    /* Midpoint rule: advance along the direction half-way through the turn. */
+    vec3 t_mid = t;
+    if (sin_phi > 1e-7f) {
+      const vec3 axis_dir = g_perp / sin_phi;
+      t_mid = glm::normalize(std::cos(half_turn) * t + std::sin(half_turn) * axis_dir);
+      t = glm::normalize(std::cos(2.0f * half_turn) * t + std::sin(2.0f * half_turn) * axis_dir);
+    }
+    x += t_mid * ds;
+  }
+  r_position = x;
+  r_direction = t;
+}
+
+namespace {
+
+/* Poisson-disc acceptance in the 4D space (x, y, z, s) whose Euclidean distance is eq. 3:
+ * d(P1, P2)² = ‖φ⁻¹(u1, v1) − φ⁻¹(u2, v2)‖² + (s1 − s2)². Hashed cells of edge r. */
+class PoissonDiscSet {
+ public:
+  explicit PoissonDiscSet(const float radius) : radius_(radius) {}
+
+  bool try_insert(const vec3 &scalp_point, const float s)
+  {
+    const glm::ivec4 c = cell(scalp_point, s);
+    for (int dw = -1; dw <= 1; dw++) {
+      for (int dz = -1; dz <= 1; dz++) {
+        for (int dy = -1; dy <= 1; dy++) {
+          for (int dx = -1; dx <= 1; dx++) {
+            const auto it = cells_.find(key(c + glm::ivec4(dx, dy, dz, dw)));
+            if (it == cells_.end()) {
+              continue;
+            }
+            for (const int32_t k : it->second) {
+              const vec3 d = points_[size_t(k)] - scalp_point;
+              const float ds = s_[size_t(k)] - s;
+              /* Bando 2003, eq. 3. */
+              if (glm::dot(d, d) + ds * ds < radius_ * radius_) {
+                return false;
+              }
+            }
+          }
+        }
+      }
+    }
+    cells_[key(c)].push_back(int32_t(points_.size()));
+    points_.push_back(scalp_point);
+    s_.push_back(s);
+    return true;
+  }
+  int64_t size() const { return int64_t(points_.size()); }
+
+ private:
+  glm::ivec4 cell(const vec3 &p, const float s) const
+  {
+    return glm::ivec4(int(std::floor(p.x / radius_)), int(std::floor(p.y / radius_)),
+                      int(std::floor(p.z / radius_)), int(std::floor(s / radius_)));
+  }
+  static uint64_t key(const glm::ivec4 &c)
+  {
+    const auto part = [](const int v) { return uint64_t(uint16_t(int16_t(v))); };
+    return part(c.x) | (part(c.y) << 16) | (part(c.z) << 32) | (part(c.w) << 48);
+  }
+
+  float radius_;
+  std::unordered_map<uint64_t, std::vector<int32_t>> cells_;
+  std::vector<vec3> points_;
+  std::vector<float> s_;
+};
+
+/* Fraction of space a maximal random Poisson-disc set of radius r leaves per sample is about
+ * 1.745 r³ (random sequential adsorption in 3D jams at a sphere packing of ~0.38): radius
+ * for a target count, with margin so that the target is reached before jamming. */
+float radius_for_count(const double volume, const int64_t count)
+{
+  return float(std::cbrt(0.573 * volume / double(std::max<int64_t>(count, 1))));
+}
+
+}  // namespace
+
+LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &length,
+                                    const LcpParams &params, const vec3 &gravity_dir)
+{
+  assert(find_length_map_error(scalp, length).empty());
+  const Span<float> areas = scalp.triangle_areas();
+  std::vector<double> cumulative(size_t(areas.size()) + 1, 0.0);
+  for (int64_t t = 0; t < areas.size(); t++) {
+    cumulative[size_t(t) + 1] = cumulative[size_t(t)] + double(areas[t]);
+  }
+  const float s_r = params.root_depth;
+  const float l_max = params.max_length;
+
+  std::mt19937_64 rng(uint64_t(params.seed));
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  /* One candidate uniformly distributed in the (u, v, s) volume, measured with eq. 3:
+   * area-uniform on the scalp, s uniform in [−s_r, L_max], rejected above L(u, v). */
+  struct Candidate {
+    ScalpPoint point;
+    vec2 uv;
+    float s, length;
+  };
+  const auto draw = [&](Candidate &r_c) {
+    const double a = unit(rng) * cumulative.back();
+    const int64_t t = std::clamp<int64_t>(
+        int64_t(std::upper_bound(cumulative.begin(), cumulative.end(), a) - cumulative.begin()) - 1,
+        0, areas.size() - 1);
+    double b1 = unit(rng), b2 = unit(rng);
+    if (b1 + b2 > 1.0) {
+      b1 = 1.0 - b1;
+      b2 = 1.0 - b2;
+    }
+    r_c.point = scalp.point_in_triangle(t, vec3(float(1.0 - b1 - b2), float(b1), float(b2)), r_c.uv);
+    r_c.s = float(-double(s_r) + unit(rng) * double(s_r + l_max));
+    r_c.length = l_max * length.sample(r_c.point, r_c.uv);
+    return r_c.s <= r_c.length;
+  };
+
+  /* The sampled volume V = ∫ (L + s_r) dA, by Monte Carlo over the same candidates. */
+  int64_t inside_num = 0;
+  const int64_t volume_probes = 20000;
+  Candidate c;
+  for (int64_t k = 0; k < volume_probes; k++) {
+    inside_num += draw(c) ? 1 : 0;
+  }
+  const double volume = cumulative.back() * double(s_r + l_max) * double(inside_num) /
+                        double(volume_probes);
+
+  float radius = params.particle_num > 0 ? radius_for_count(volume, params.particle_num) :
+                                           params.particle_spacing;
+  const int64_t expected_num = params.particle_num > 0 ?
+                                   int64_t(params.particle_num) :
+                                   int64_t(volume / (1.745 * double(radius) * radius * radius)) + 1;
+  std::vector<Candidate> accepted;
+  PoissonDiscSet disc(radius);
+  int64_t failures = 0;
+  while (params.particle_num == 0 || int64_t(accepted.size()) < params.particle_num) {
+    if (failures > 30 * expected_num + 1000) {
+      if (params.particle_num == 0) {
+        break; /* Maximal for this radius. */
+      }
+      /* Jammed before the target count: continue with a smaller disc (the samples kept so
+       * far are farther apart than it, so they stay valid). */
+      radius *= 0.9f;
+      PoissonDiscSet smaller(radius);
+      for (const Candidate &a : accepted) {
+        smaller.try_insert(a.point.position, a.s);
+      }
+      disc = std::move(smaller);
+      failures = 0;
+    }
+    if (!draw(c) || !disc.try_insert(c.point.position, c.s)) {
+      failures++;
+      continue;
+    }
+    failures = 0;
+    accepted.push_back(c);
+  }
+
+  const ScalpPoint whorl = scalp.locate(vec2(params.whorl_u, params.whorl_v));
+  LcpParticles particles;
+  for (const Candidate &a : accepted) {
+    const vec3 t_r = root_direction(a.point.normal, whorl.normal, params.root_tangent_weight,
+                                    params.root_normal_weight);
+    vec3 x, t;
+    if (a.s < 0.0f) {
+      /* §3.2: root particles inside the scalp, x = φ⁻¹(u, v) + s t_r(u, v). */
+      x = a.point.position + a.s * t_r;
+      t = t_r;
+    }
+    else {
+      cantilever_beam(a.point.position, t_r, gravity_dir, a.length, a.s, params.beam_length, x, t);
+    }
+    particles.positions.push_back(x);
+    particles.directions.push_back(t);
+    particles.u.push_back(a.uv.x);
+    particles.v.push_back(a.uv.y);
+    particles.s.push_back(a.s);
+  }
+  return particles;
+}
+
+LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Span<vec3> positions,
+                                    const Span<vec2> root_uv, const LcpParams &params)
+{
+  assert(find_groom_error(curve_offsets, positions).empty());
+  const int64_t curves_num = curve_offsets.size() - 1;
+  /* (u, v) per strand. */
+  std::vector<vec2> strand_uv(static_cast<size_t>(curves_num));
+  if (!root_uv.is_empty()) {
+    std::copy(root_uv.begin(), root_uv.end(), strand_uv.begin());
+  }
+  else {
+    vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    for (int64_t c = 0; c < curves_num; c++) {
+      lo = glm::min(lo, positions[curve_offsets[c]]);
+      hi = glm::max(hi, positions[curve_offsets[c]]);
+    }
+    const vec3 extent = hi - lo;
+    int axes[3] = {0, 1, 2};
+    std::sort(axes, axes + 3, [&](const int a, const int b) { return extent[a] > extent[b]; });
+    for (int64_t c = 0; c < curves_num; c++) {
+      const vec3 p = positions[curve_offsets[c]] - lo;
+      strand_uv[size_t(c)] = vec2(p[axes[0]] / std::max(extent[axes[0]], 1e-12f),
+                                  p[axes[1]] / std::max(extent[axes[1]], 1e-12f));
+    }
+  }
+
+  /* Candidates every r/4 along each strand, its root continued s_r beneath the scalp. */
+  struct Candidate {
+    int32_t curve;
+    float s;
+    vec3 position, direction;
+  };
+  const float step = params.particle_spacing * 0.25f;
+  std::vector<Candidate> candidates;
+  for (int64_t c = 0; c < curves_num; c++) {
+    const IndexRange points = curve_points(curve_offsets, c);
+    const vec3 root = positions[points.start];
+    const vec3 root_dir = glm::normalize(positions[points.start + 1] - root);
+    for (float s = -params.root_depth; s < 0.0f; s += step) {
+      candidates.push_back({int32_t(c), s, root + s * root_dir, root_dir});
+    }
+    float arc = 0.0f, next = 0.0f;
+    for (int64_t k = points.start; k + 1 < points.one_after_last(); k++) {
+      const vec3 seg = positions[k + 1] - positions[k];
+      const float len = glm::length(seg);
+      while (next <= arc + len) {
+        const float f = (next - arc) / len;
+        candidates.push_back({int32_t(c), next, positions[k] + f * seg, seg / len});
+        next += step;
+      }
+      arc += len;
+    }
+  }
+  std::mt19937_64 rng(uint64_t(params.seed));
+  std::shuffle(candidates.begin(), candidates.end(), rng);
+
+  /* Poisson-disc selection with eq. 3, where φ⁻¹(u, v) is the strand's root. */
+  const auto select = [&](const float radius, const int64_t limit, std::vector<int32_t> &r_chosen) {
+    r_chosen.clear();
+    PoissonDiscSet disc(radius);
+    for (size_t k = 0; k < candidates.size() && int64_t(r_chosen.size()) < limit; k++) {
+      const Candidate &cand = candidates[k];
+      if (disc.try_insert(positions[curve_offsets[cand.curve]], cand.s)) {
+        r_chosen.push_back(int32_t(k));
+      }
+    }
+  };
+  std::vector<int32_t> chosen;
+  const int64_t unlimited = std::numeric_limits<int64_t>::max();
+  float radius = params.particle_spacing;
+  select(radius, unlimited, chosen);
+  if (params.particle_num > 0) {
+    /* Adjust the radius toward the target count, then stop at the target. */
+    for (int iter = 0; iter < 6 && int64_t(chosen.size()) != params.particle_num; iter++) {
+      radius *= float(std::cbrt(double(chosen.size()) / double(params.particle_num)));
+      select(radius, unlimited, chosen);
+    }
+    for (int iter = 0; iter < 20 && int64_t(chosen.size()) < params.particle_num; iter++) {
+      radius *= 0.8f;
+      select(radius, unlimited, chosen);
+    }
+    select(radius, params.particle_num, chosen);
+  }
+
+  LcpParticles particles;
+  for (const int32_t k : chosen) {
+    const Candidate &cand = candidates[size_t(k)];
+    particles.positions.push_back(cand.position);
+    particles.directions.push_back(cand.direction);
+    particles.u.push_back(strand_uv[size_t(cand.curve)].x);
+    particles.v.push_back(strand_uv[size_t(cand.curve)].y);
+    particles.s.push_back(cand.s);
+  }
+  return particles;
+}
+
+}  // namespace hairdyn

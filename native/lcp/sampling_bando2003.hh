@@ -1,0 +1,59 @@
+#pragma once
+/* Particle initialisation of Bando 2003, §3.2: Poisson-disc samples of the (u, v, s) volume
+ * between s = −s_r and the length map L(u, v), with the distance of eq. 3; root particles
+ * (s < 0) inside the scalp, the others placed by Anjyo's cantilever beam. Or: samples along
+ * an existing groom's strands. */
+#include <string>
+#include <vector>
+
+#include "core/math.hh"
+#include "core/span.hh"
+#include "lcp/lcp_params.hh"
+#include "lcp/scalp_map_bando2003.hh"
+
+namespace hairdyn {
+
+/* The particles of an LCP hair volume, one array per attribute. s < 0: root particle. */
+struct LcpParticles {
+  std::vector<vec3> positions;
+  std::vector<vec3> directions; /* Unit hair direction t. */
+  std::vector<float> u, v, s;
+
+  int64_t size() const { return int64_t(positions.size()); }
+};
+
+/* The length map L(u, v) / L_max in [0, 1]: the scalp's per-vertex weights, or a grey image
+ * (rows from v = 0 upward, columns from u = 0) sampled bilinearly. */
+struct LengthMap {
+  Span<float> image; /* image_height × image_width values, or empty to use the weights. */
+  int64_t image_width = 0;
+  int64_t image_height = 0;
+
+  float sample(const ScalpPoint &point, const vec2 &uv) const;
+};
+
+/* Empty when sampling can run; otherwise a sentence (empty length map, bad image size...). */
+std::string find_length_map_error(const ScalpMap &scalp, const LengthMap &length);
+
+/* Root direction t_r of eq. 4 from the scalp normal n and the whorl normal n_w. */
+vec3 root_direction(const vec3 &normal, const vec3 &whorl_normal, float w_t, float w_n);
+
+/* Position and direction at arc length `s` of a cantilever beam of total length `length`
+ * (Anjyo, Usami, Kurihara 1992) rooted at `root` along `root_dir`, bent by gravity along
+ * `gravity_dir` (unit) with bending length b. */
+void cantilever_beam(const vec3 &root, const vec3 &root_dir, const vec3 &gravity_dir,
+                     float length, float s, float bending_length, vec3 &r_position,
+                     vec3 &r_direction);
+
+/* Poisson-disc sampling of the scalp volume (§3.2) in the scalp's space; gravity_dir is the
+ * unit gravity direction in that space (world −Z for a world-space scalp). */
+LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &length,
+                                    const LcpParams &params, const vec3 &gravity_dir);
+
+/* Particles along an existing groom (curves): (u, v) from the strand's root (root_uv, two
+ * floats per strand, or empty: the roots' bounding box projected on its two widest axes),
+ * s from arc length, t from the tangents; roots continue s_r beneath the first point. */
+LcpParticles sample_groom_particles(Span<int32_t> curve_offsets, Span<vec3> positions,
+                                    Span<vec2> root_uv, const LcpParams &params);
+
+}  // namespace hairdyn
