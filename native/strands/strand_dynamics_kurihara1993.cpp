@@ -72,6 +72,12 @@ struct Deflection {
         cos_phi(std::cos(angles.y))
   {
   }
+  /* From sines and cosines computed before: (sin θ, cos θ, sin φ, cos φ). */
+  explicit Deflection(const vec4 &trig)
+      : sin_theta(trig.x), cos_theta(trig.y), sin_phi(trig.z), cos_phi(trig.w)
+  {
+  }
+  vec4 trig() const { return vec4(sin_theta, cos_theta, sin_phi, cos_phi); }
 
   /* chart · D without forming D: each column of D is a combination of chart's columns. */
   mat3 rotate(const mat3 &chart) const
@@ -128,6 +134,7 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
   rest_rotations_.assign(points, mat3(1.0f));
   angles_.assign(points, vec2(0.0f));
   angular_velocities_.assign(points, vec2(0.0f));
+  trig_.assign(points, vec4(0.0f, 1.0f, 0.0f, 1.0f));
   hinge_steps_.assign(points, HingeStep<vec2>{vec2(0.0f), vec2(0.0f)});
   positions_wo_.resize(points);
   velocities_wo_.resize(points);
@@ -219,6 +226,11 @@ std::pair<int64_t, int64_t> StrandSolver::step_strand(const int64_t curve,
   const size_t end = size_t(points.one_after_last());
   prepare_hinges(points, substeps[0].h);
   const vec2 k(params_.k_theta, params_.k_phi);
+  /* Each segment's deflection at the end of a substep is its deflection at the start of the
+   * next: its sines and cosines are computed once per substep, not twice. */
+  for (size_t i = root + 1; i < end; i++) {
+    trig_[i] = Deflection(angles_[i]).trig();
+  }
   for (const Substep &substep : substeps) {
     const float h = substep.h;
     const float inv_h = 1.0f / h;
@@ -238,7 +250,7 @@ std::pair<int64_t, int64_t> StrandSolver::step_strand(const int64_t curve,
       vec2 &omega = angular_velocities_[i];
 
       /* Where the segment is before its own update: old angles in the parent's new frame. */
-      const Deflection old_deflection(angles);
+      const Deflection old_deflection(trig_[i]);
       const mat3 old_frame = old_deflection.rotate(chart);
       const vec3 tip = node + d * old_frame[2];
       /* Rigid segment: the tip moves with the parent's motion (tip − previous tip) plus its
@@ -273,7 +285,8 @@ std::pair<int64_t, int64_t> StrandSolver::step_strand(const int64_t curve,
       advance_hinge(hinge_steps_[i], h, k, torque, angles, omega);
 
       /* Rebuild the segment from its new angles: its length cannot change. */
-      frame = Deflection(angles).rotate(chart);
+      Deflection deflection(angles);
+      frame = deflection.rotate(chart);
       vec3 new_tip = node + d * frame[2];
       /* Ward & Lin 2003 §5.5: no node ends a step inside a body. The segment turns about its
        * root until its tip lies on the surface's tangent plane at T, and stops turning (an
@@ -289,10 +302,12 @@ std::pair<int64_t, int64_t> StrandSolver::step_strand(const int64_t curve,
         const vec3 local = glm::transpose(chart) * glm::normalize(target - node);
         angles = vec2(std::asin(glm::clamp(local.x, -1.0f, 1.0f)), std::atan2(local.y, local.z));
         omega = vec2(0.0f);
-        frame = Deflection(angles).rotate(chart);
+        deflection = Deflection(angles);
+        frame = deflection.rotate(chart);
         new_tip = node + d * frame[2];
         projections += attempt == 0 ? 1 : 0;
       }
+      trig_[i] = deflection.trig();
       node_velocity = (new_tip - positions_wo_[i]) * inv_h;
       node = new_tip;
       positions_wo_[i] = node;

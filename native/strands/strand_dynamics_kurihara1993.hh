@@ -162,6 +162,7 @@ class StrandSolver {
   std::vector<vec2> angles_;
   std::vector<vec2> angular_velocities_;
   std::vector<HingeStep<vec2>> hinge_steps_; /* the integrator's coefficients this frame */
+  std::vector<vec4> trig_; /* (sin θ, cos θ, sin φ, cos φ) of the angles, within a step */
 
   /* Per point. */
   std::vector<vec3> positions_wo_;
