@@ -31,5 +31,5 @@ suite "Python with the bpy module (bpy $(.venv/bin/python -c 'import importlib.m
 if ((failed)); then
   echo "failed suites: ${failures[*]}"
 fi
-echo "test suites: $passed passed, $failed failed"
+echo "suites: $passed passed, $failed failed"
 exit $((failed > 0))
