@@ -53,6 +53,13 @@ def vertex_group_parts(obj, mesh_vertices_num, names):
     return parts or None
 
 
+def may_deform(obj):
+    """Whether obj's shape (not just its transform) can change over time: it has modifiers
+    or shape keys. Blender's is_deform_modified() is no help here: it answers for the current
+    frame's values (a Displace of strength 0 "does not deform")."""
+    return bool(obj.modifiers) or obj.data.shape_keys is not None
+
+
 class Colliders:
     """Native colliders for a hair object, kept in step with the scene frame by frame."""
 
@@ -64,6 +71,7 @@ class Colliders:
         self.names = [obj.name for obj in self.objects]
         self.colliders = []
         self.deforming = []
+        self.vertices = []  # object-space vertices each collider was last built from
         start = time.perf_counter()
         for obj in self.objects:
             mesh = bridge.read_mesh(obj, depsgraph)
@@ -74,21 +82,29 @@ class Colliders:
                 raise HairdynError(f"Collider '{obj.name}': {error}") from None
             collider.set_transform(mesh.matrix_world)
             self.colliders.append(collider)
-            self.deforming.append(obj.is_deform_modified(scene, 'PREVIEW'))
+            self.deforming.append(may_deform(obj))
+            self.vertices.append(mesh.vertices)
         self.build_ms = (time.perf_counter() - start) * 1000.0
         self.set = self.native.ColliderSet(self.colliders)
 
     def update(self, depsgraph):
-        """Follow the colliders to the current frame; returns the ms spent rebuilding."""
+        """Follow the colliders to the current frame: a new transform for each, and a rebuild
+        for those whose evaluated shape changed. Returns the ms spent rebuilding."""
         rebuild_ms = 0.0
-        for obj, collider, deforming in zip(self.objects, self.colliders, self.deforming):
-            if deforming:
-                mesh = bridge.read_mesh(obj, depsgraph)
+        for index, (obj, collider) in enumerate(zip(self.objects, self.colliders)):
+            if not self.deforming[index]:
+                collider.set_transform(bridge.object_matrix(obj, depsgraph))
+                continue
+            mesh = bridge.read_mesh(obj, depsgraph)
+            if len(mesh.vertices) != len(self.vertices[index]):
+                raise HairdynError(f"Collider '{obj.name}' changed its vertex count during the "
+                                   "simulation; hairdyn follows deforming colliders of fixed "
+                                   "topology")
+            if not np.array_equal(mesh.vertices, self.vertices[index]):
                 collider.rebuild(mesh.vertices)
                 rebuild_ms += collider.build_ms
-                collider.set_transform(mesh.matrix_world)
-            else:
-                collider.set_transform(bridge.object_matrix(obj, depsgraph))
+                self.vertices[index] = mesh.vertices
+            collider.set_transform(mesh.matrix_world)
         return rebuild_ms
 
     def penetration(self, positions_wo):
