@@ -16,7 +16,10 @@ struct LcpParams {
   float root_normal_weight = 1.0f;  /* w_n of eq. 4: weight of the scalp normal. */
   float whorl_u = 0.5f;             /* u of the whorl centre on the scalp (eq. 4's n_w). */
   float whorl_v = 0.5f;             /* v of the whorl centre. */
-  float beam_length = 0.06f; /* m, b = (EI / (λg))^(1/3): bending length of Anjyo's cantilever. */
+  /* m, b = (EI / (λg))^(1/3): bending length of Anjyo's cantilever. 3 cm starts 12 cm hair
+   * near its hanging shape; a stiffer start falls over the head in the first frames and tears
+   * the loose connections. */
+  float beam_length = 0.03f;
   int32_t seed = 0;          /* Random seed of the Poisson-disc sampling. */
 
   /* ---- connections and hair dynamics (§3.2-3.3) ---- */

@@ -74,6 +74,36 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
   reset();
 }
 
+void LcpSolver::set_body_contact(LcpContactQuery query)
+{
+  contact_query_ = std::move(query);
+  if (!contact_query_) {
+    return;
+  }
+  const mat3 rotation = head_rest_.matrix();
+  const mat3 to_head = glm::transpose(rotation);
+  bool moved = false;
+  for (size_t i = 0; i < x_rest_head_.size(); i++) {
+    if (is_root_[i]) {
+      continue;
+    }
+    LcpContact contact;
+    if (contact_query_(rotation * x_rest_head_[i] + head_rest_.translation, contact)) {
+      /* On the surface, a hair's breadth outside. */
+      const vec3 outside_wo = contact.surface_point_wo + 1e-4f * contact.normal_wo;
+      x_rest_head_[i] = to_head * (outside_wo - head_rest_.translation);
+      moved = true;
+    }
+  }
+  if (moved) {
+    connections_ = build_connections(x_rest_head_, t_rest_head_, is_root_, params_.h1,
+                                     params_.a0, params_.neighbor_num);
+    k_.resize(size_t(connections_.size()));
+    alpha_k_.resize(size_t(connections_.size()));
+  }
+  reset();
+}
+
 void LcpSolver::reset()
 {
   x_head_ = x_rest_head_;

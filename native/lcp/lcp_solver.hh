@@ -51,7 +51,10 @@ class LcpSolver {
   /* Back to the rest state and the rest head transform; the wind starts over. */
   void reset();
   /* Body collisions (see lcp/body_collision_bando2003.hh); an empty query turns them off. */
-  void set_body_contact(LcpContactQuery query) { contact_query_ = std::move(query); }
+  /* The body the hair collides with (§3.5). Rest particles inside it (a beam-shaped initial
+   * hair ignores the body) are first moved onto its surface and connected again, so the
+   * simulation starts from a state the contact response will not tear apart; then reset(). */
+  void set_body_contact(LcpContactQuery query);
 
   const LcpParams &params() const { return params_; }
   int64_t particles_num() const { return int64_t(x_head_.size()); }
