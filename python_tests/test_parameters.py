@@ -8,6 +8,7 @@ from hairdyn import native, properties
 
 MIRRORS = [
     ("StrandParams", properties.HairdynStrandSettings),
+    ("LcpParams", properties.HairdynLcpSettings),
     ("CollisionParams", properties.HairdynCollisionSettings),
 ]
 

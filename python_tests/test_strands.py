@@ -134,7 +134,7 @@ def test_set_nested_parameters_from_the_command_line(open_fixture):
     assert settings.strands.integrator == 'EXPLICIT'
     assert [item.object.name for item in settings.colliders] == ["Body"]
     for bad, message in [("damping=1", "ambiguous"), ("wind_direction=1,0", "needs 3 value"),
-                         ("substeps=0", "between 1 and 1000"), ("colliders=Nope", "Nope")]:
+                         ("strands.substeps=0", "between 1 and 1000"), ("colliders=Nope", "Nope")]:
         with pytest.raises(cli.UsageError, match=message):
             cli.apply_settings(settings, [bad])
 

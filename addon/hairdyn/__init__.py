@@ -26,6 +26,7 @@ from . import (errors, native, cache, hair_formats, properties, bridge, playback
 
 classes = (
     properties.HairdynStrandSettings,
+    properties.HairdynLcpSettings,
     properties.HairdynCollisionSettings,
     properties.HairdynColliderItem,
     properties.HairdynSettings,

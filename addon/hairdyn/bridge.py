@@ -210,6 +210,21 @@ def read_mesh(obj, depsgraph):
                     matrix_array(evaluated.matrix_world))
 
 
+def vertex_group_members(obj, names, vertices_num):
+    """{group name: int32 vertex indices with weight > 0.5} for the named groups obj has.
+
+    Blender has no bulk read of group weights, so this walks the vertices once; call it when
+    a simulation is set up, never per frame."""
+    indices = {group.index: group.name for group in obj.vertex_groups if group.name in names}
+    members = {name: [] for name in indices.values()}
+    for vertex in obj.data.vertices[:vertices_num]:
+        for element in vertex.groups:
+            name = indices.get(element.group)
+            if name is not None and element.weight > 0.5:
+                members[name].append(vertex.index)
+    return {name: np.array(found, dtype=np.int32) for name, found in members.items()}
+
+
 def object_matrix(obj, depsgraph):
     """The evaluated object-to-world matrix, (4, 4) float64."""
     return matrix_array(obj.evaluated_get(depsgraph).matrix_world)

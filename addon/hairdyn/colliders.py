@@ -36,20 +36,9 @@ def part_names(settings):
 
 
 def vertex_group_parts(obj, mesh_vertices_num, names):
-    """int32 vertex-index arrays, one per named vertex group the object has (weight > 0.5).
-
-    Blender has no bulk read of group weights, so this walks the vertices once, when the
-    collider is built (never per frame)."""
-    indices = {group.index: group.name for group in obj.vertex_groups if group.name in names}
-    if not indices:
-        return None
-    members = {name: [] for name in indices.values()}
-    for vertex in obj.data.vertices[:mesh_vertices_num]:
-        for element in vertex.groups:
-            name = indices.get(element.group)
-            if name is not None and element.weight > 0.5:
-                members[name].append(vertex.index)
-    parts = [np.array(members[name], dtype=np.int32) for name in names if members.get(name)]
+    """int32 vertex-index arrays, one per named vertex group the object has, or None."""
+    members = bridge.vertex_group_members(obj, names, mesh_vertices_num)
+    parts = [members[name] for name in names if len(members.get(name, ()))]
     return parts or None
 
 

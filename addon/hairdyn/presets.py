@@ -15,8 +15,9 @@ BUNDLED = Path(__file__).resolve().parent / "presets"
 def _values():
     """Every solver setting a preset stores, as Python paths under `settings`."""
     top = ["settings.method", "settings.use_collision", "settings.use_default_colliders",
-           "settings.collider_parts"]
+           "settings.collider_parts", "settings.lcp_scalp"]
     groups = [("strands", properties.HairdynStrandSettings),
+              ("lcp", properties.HairdynLcpSettings),
               ("collision", properties.HairdynCollisionSettings)]
     nested = [f"settings.{group}.{name}" for group, cls in groups
               for name in cls.__annotations__]

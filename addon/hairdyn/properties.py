@@ -14,6 +14,10 @@ METHODS = (
     ("STRANDS", "Strands",
      "Strand dynamics: chains of rigid segments with hinge springs (Kurihara 1993), implicit "
      "integration (Ward & Lin 2003)"),
+    ("LCP", "LCP",
+     "Loosely connected particles (Bando 2003): particles sample the hair volume over the "
+     "scalp, loose springs keep its length, SPH interactions its density; the strands follow "
+     "the particles"),
 )
 
 # Properties shown in a unit scaled from the native struct's SI unit, so that hair-sized
@@ -118,6 +122,113 @@ class HairdynStrandSettings(bpy.types.PropertyGroup):
         description="Seed of the wind turbulence and of the child roots")
 
 
+class HairdynLcpSettings(bpy.types.PropertyGroup):
+    """Mirrors native LcpParams (native/lcp/lcp_params.hh) field for field."""
+
+    particle_spacing: FloatProperty(
+        name='Particle Spacing (r)', default=0.012, min=0.0001, max=1.0, precision=4,
+        description='r, m: Poisson-disc radius of the particles in the (u, v, s) distance of eq. 3')
+    particle_num: IntProperty(
+        name='Particle Count (N)', default=0, min=0, max=10000000,
+        description='N: Target particle count (0: as many as the spacing allows)')
+    root_depth: FloatProperty(
+        name='Root Depth (s_r)', default=0.01, min=0.0, max=1.0, precision=4,
+        description='s_r, m: Depth of the fixed root particles beneath the scalp (§3.2)')
+    max_length: FloatProperty(
+        name='Max Length (L_max)', default=0.25, min=0.0001, max=10.0, precision=4,
+        description='L_max, m: Hair length where the length map is 1 (§3.2)')
+    root_tangent_weight: FloatProperty(
+        name='Root Tangent Weight (w_t)', default=0.3, min=0.0, max=100.0, precision=4,
+        description='w_t: Tangent weight of the root direction, eq. 4 (large: hair lies down)')
+    root_normal_weight: FloatProperty(
+        name='Root Normal Weight (w_n)', default=1.0, min=0.0, max=100.0, precision=4,
+        description='w_n: Normal weight of the root direction, eq. 4')
+    whorl_u: FloatProperty(
+        name='Whorl U (u_w)', default=0.5, min=0.0, max=1.0, precision=4,
+        description='u_w: u of the hair whorl centre on the scalp (eq. 4)')
+    whorl_v: FloatProperty(
+        name='Whorl V (v_w)', default=0.5, min=0.0, max=1.0, precision=4,
+        description='v_w: v of the hair whorl centre on the scalp (eq. 4)')
+    beam_length: FloatProperty(
+        name='Beam Length (b)', default=0.03, min=0.001, max=100.0, precision=4,
+        description='b, m: Bending length (EI/λg)^(1/3) of the cantilever-beam initial shape (Anjyo 1992)')
+    seed: IntProperty(
+        name='Seed', default=0, min=0, max=2147483647,
+        description='Random seed of the Poisson-disc sampling')
+    h1: FloatProperty(
+        name='H1 (h₁)', default=0.016, min=1e-05, max=1.0, precision=4,
+        description='h₁, m: Smoothing length of the connections: pairs within 2h₁ at rest (eq. 7)')
+    a0: FloatProperty(
+        name='A0 (a₀)', default=0.5, min=0.0, max=1.0, precision=4,
+        description='a₀: Alignment threshold: pairs with a_ij < a₀ are dropped (eq. 6)')
+    neighbor_num: IntProperty(
+        name='Neighbor Count (N_n)', default=12, min=1, max=1000,
+        description='N_n: Connections kept per particle, strongest c_ij W(l_ij, h₁) first (§3.2)')
+    young_modulus: FloatProperty(
+        name='Young Modulus (E)', default=10000.0, min=0.0, max=1000000000000.0, precision=4,
+        description="E, Pa: Tensile Young's modulus kept constant per particle (eq. 10-14)")
+    material_density: FloatProperty(
+        name='Material Density (δ)', default=1300.0, min=1.0, max=100000.0, precision=4,
+        description='δ, kg/m³: Density of the hair material, giving the cross-section A_i (eq. 9)')
+    spring_damping: FloatProperty(
+        name='Spring Damping (γ)', default=0.005, min=0.0, max=10.0, precision=4,
+        description='γ, s: Damping of the springs: force γ·α_ij k_ij·(v_ij·x̂_ij) (§3.3)')
+    hair_density: FloatProperty(
+        name='Hair Density (ρ_h)', default=10.0, min=0.001, max=10000.0, precision=4,
+        description='ρ_h, kg/m³: Mass of hair per volume of the hair region; sets the particle mass m_i')
+    h2: FloatProperty(
+        name='H2 (h₂)', default=0.011, min=1e-05, max=1.0, precision=4,
+        description='h₂, m: Smoothing length of hair-hair interactions (eq. 1, 16-18)')
+    attraction_repulsion: BoolProperty(
+        name='Attraction Repulsion', default=True,
+        description='Apply attraction/repulsion (eq. 16)')
+    pressure_stiffness: FloatProperty(
+        name='Pressure Stiffness (k_a)', default=0.05, min=0.0, max=10000.0, precision=4,
+        description='k_a, m²/s²: Magnitude of the attraction/repulsion, P = k_a(ρ − ρ₀) (eq. 16)')
+    rest_density: FloatProperty(
+        name='Rest Density (ρ₀)', default=8.0, min=0.0, max=100000.0, precision=4,
+        description='ρ₀, kg/m³: Average hair density kept by eq. 16: small is repulsive, large cohesive')
+    hair_collision: BoolProperty(
+        name='Hair Collision', default=True,
+        description='Apply inelastic hair-hair collision (eq. 17)')
+    collision_damping: FloatProperty(
+        name='Collision Damping (d_c)', default=60.0, min=0.0, max=1000000.0, precision=4,
+        description='d_c, 1/s: Collision damping constant of eq. 17 (per unit SPH volume)')
+    hair_friction: BoolProperty(
+        name='Hair Friction', default=True,
+        description='Apply hair-hair friction (eq. 18)')
+    friction_damping: FloatProperty(
+        name='Friction Damping (d_f)', default=10.0, min=0.0, max=1000000.0, precision=4,
+        description='d_f, 1/s: Frictional damping constant of eq. 18 (per unit SPH volume)')
+    gravity: FloatProperty(
+        name='Gravity (g)', default=9.81, min=0.0, max=1000.0, precision=4,
+        description='g, m/s²: Gravity along world −Z (§3.5)')
+    air_friction: FloatProperty(
+        name='Air Friction', default=2.0, min=0.0, max=10000.0, precision=4,
+        description='1/s: Air friction: damping force proportional to velocity (§3.5)')
+    wind_speed: FloatProperty(
+        name='Wind Speed', default=0.0, min=0.0, max=100.0, precision=4,
+        description='m/s: Free-stream speed of the SPH wind (§3.5); 0 = none')
+    wind_heading: FloatProperty(
+        name='Wind Heading', default=0.0, min=-7.0, max=7.0, precision=4,
+        description='rad: Horizontal direction the wind blows to, from +X toward +Y')
+    wind_particle_spacing: FloatProperty(
+        name='Wind Particle Spacing', default=0.03, min=0.001, max=1.0, precision=4,
+        description='m: Spacing (and smoothing length) of the air particles')
+    wind_drag: FloatProperty(
+        name='Wind Drag (k_d)', default=20.0, min=0.0, max=100000.0, precision=4,
+        description='k_d, 1/s: Drag between hair and air particles, acting on both (§3.5)')
+    air_density: FloatProperty(
+        name='Air Density', default=1.2, min=0.001, max=1000.0, precision=4,
+        description='kg/m³: Density of the air particles')
+    body_friction: FloatProperty(
+        name='Body Friction (μ)', default=0.3, min=0.0, max=10.0, precision=4,
+        description='μ: Coulomb friction coefficient of hair sliding on the body (§3.5)')
+    substeps: IntProperty(
+        name='Substeps', default=8, min=1, max=1000,
+        description='Time steps per frame')
+
+
 class HairdynCollisionSettings(bpy.types.PropertyGroup):
     """Mirrors native CollisionParams (native/collision/collision_params.hh) field for field."""
 
@@ -182,6 +293,11 @@ class HairdynSettings(bpy.types.PropertyGroup):
         description="Mesh the hair roots are attached to. Empty: the Curves object's surface, "
                     "or the mesh that emits the particle hair")
     strands: PointerProperty(type=HairdynStrandSettings, name="Strand Settings")
+    lcp: PointerProperty(type=HairdynLcpSettings, name="LCP Settings")
+    lcp_scalp: StringProperty(
+        name="Scalp", default="scalp",
+        description="Vertex group of the head that LCP samples the hair volume over (Bando "
+                    "2003 §3.2); the hair's lengths come from the groom's strands")
     output_children: PointerProperty(
         name="Output Children", type=bpy.types.Object,
         description="Curves object that receives the child hairs every frame (created when "

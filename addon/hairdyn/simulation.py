@@ -87,6 +87,80 @@ def scalp_points(groom, head_mesh, count, seed):
     return np.ascontiguousarray(points, dtype=np.float32)
 
 
+def properties_module():
+    from . import properties
+
+    return properties
+
+
+def scalp_patch(head, depsgraph, group_name):
+    """The scalp as a mesh of its own (Bando 2003 §3.2): world-space vertices and triangles of
+    the head's faces whose corners all lie in the vertex group."""
+    mesh = bridge.read_mesh(head, depsgraph)
+    members = bridge.vertex_group_members(head, {group_name}, len(mesh.vertices)).get(group_name)
+    if members is None or len(members) == 0:
+        raise HairdynError(f"'{head.name}' has no vertex group '{group_name}' marking the scalp: "
+                           "LCP samples the hair volume over it (set Scalp in the LCP panel)")
+    inside = np.zeros(len(mesh.vertices), dtype=bool)
+    inside[members] = True
+    triangles = mesh.triangles[inside[mesh.triangles].all(axis=1)]
+    if len(triangles) == 0:
+        raise HairdynError(f"The scalp group '{group_name}' of '{head.name}' covers no face")
+    used = np.unique(triangles)
+    remap = np.full(len(mesh.vertices), -1, dtype=np.int32)
+    remap[used] = np.arange(len(used), dtype=np.int32)
+    return (np.ascontiguousarray(mesh.vertices_wo()[used]),
+            np.ascontiguousarray(remap[triangles], dtype=np.int32))
+
+
+def length_weights(groom, scalp_vertices_wo):
+    """The length map of Bando 2003 §3.2 from a groom: per scalp vertex, the length of the
+    strand rooted nearest to it, over the longest strand; and that longest length (m)."""
+    segments = np.linalg.norm(np.diff(groom.positions_wo.astype(np.float64), axis=0), axis=1)
+    segments[groom.curve_offsets[1:-1] - 1] = 0.0  # no segment between two strands
+    lengths = np.add.reduceat(np.append(segments, 0.0), groom.curve_offsets[:-1])
+    roots = groom.positions_wo[groom.curve_offsets[:-1]].astype(np.float64)
+    nearest = np.empty(len(scalp_vertices_wo), dtype=np.int64)
+    for start in range(0, len(scalp_vertices_wo), 2048):
+        block = scalp_vertices_wo[start:start + 2048].astype(np.float64)
+        nearest[start:start + 2048] = ((block[:, None] - roots[None]) ** 2).sum(axis=2).argmin(axis=1)
+    longest = float(lengths.max())
+    return np.ascontiguousarray(lengths[nearest] / longest, dtype=np.float32), longest
+
+
+class ParticleSkin:
+    """LCP's motion on real strands (Bando 2003 §4): every strand point follows the particles
+    nearest to it at rest, each carrying the point's rest offset from it (inverse-distance
+    weights over `neighbours_num` particles); roots follow the head rigidly."""
+
+    def __init__(self, groom, particles_rest_wo, head_matrix, neighbours_num=4, chunk=1024):
+        self.rest = np.ascontiguousarray(groom.positions_wo, dtype=np.float32)
+        self.roots = groom.curve_offsets[:-1]
+        points = self.rest.astype(np.float64)
+        particles = particles_rest_wo.astype(np.float64)
+        k = min(neighbours_num, len(particles))
+        self.neighbours = np.empty((len(points), k), dtype=np.int64)
+        weights = np.empty((len(points), k))
+        for start in range(0, len(points), chunk):
+            block = points[start:start + chunk]
+            distances = np.sqrt(((block[:, None, :] - particles[None, :, :]) ** 2).sum(axis=2))
+            nearest = np.argpartition(distances, k - 1, axis=1)[:, :k]
+            self.neighbours[start:start + chunk] = nearest
+            weights[start:start + chunk] = 1.0 / np.maximum(
+                np.take_along_axis(distances, nearest, axis=1), 1e-6)
+        self.weights = weights / weights.sum(axis=1, keepdims=True)
+        self.offset = points - (self.weights[:, :, None] * particles[self.neighbours]).sum(axis=1)
+        inverse = np.linalg.inv(np.asarray(head_matrix, dtype=np.float64))
+        self.roots_head = (self.rest[self.roots] @ inverse[:3, :3].T + inverse[:3, 3])
+
+    def apply(self, particles_wo, head_matrix):
+        """Strand positions (N, 3) float32 for the particles' current positions."""
+        moved = (self.weights[:, :, None] * np.asarray(particles_wo)[self.neighbours]).sum(axis=1)
+        positions = (moved + self.offset).astype(np.float32)
+        positions[self.roots] = bridge.to_world(head_matrix, self.roots_head)
+        return positions
+
+
 class Simulation:
     """Build at the rest frame (the scene on the first frame to simulate), then step() and
     frame_arrays() once per frame."""
@@ -103,6 +177,8 @@ class Simulation:
         head_matrix = bridge.object_matrix(self.head, depsgraph)
         self.colliders = None
         self.children = None
+        self.skin = None  # LCP: how the strands follow the particles
+        self.strand_positions = None
         try:
             if self.method == 'FOLLOW':
                 self.solver = self.native.FollowSolver(
@@ -114,17 +190,35 @@ class Simulation:
                     self.groom.curve_offsets, self.groom.positions_wo, head_matrix,
                     root_normals(self.groom, head_mesh), params)
                 self.children = self._make_children(params, head_mesh)
+            elif self.method == 'LCP':
+                self.solver = self._make_lcp(depsgraph, head_matrix)
             else:
                 raise HairdynError(f"Unknown method '{self.method}'")
         except ValueError as error:
             raise HairdynError(f"'{hair_obj.name}': {error}") from None
         if settings.use_collision:
             self.colliders = colliders.Colliders(hair_obj, self.head, scene, depsgraph)
-            if hasattr(self.solver, "set_colliders"):
+            if self.method == 'LCP':  # moves rest particles out of the body: skin after it
+                self.solver.set_colliders(self.colliders.set)
+            elif hasattr(self.solver, "set_colliders"):
                 self.solver.set_colliders(self.colliders.set, self.colliders.params)
-        self.previous_positions = np.array(self.solver.positions)
+        if self.method == 'LCP':
+            self.skin = ParticleSkin(self.groom, np.array(self.solver.positions), head_matrix)
+            self.strand_positions = self.skin.rest.copy()
+        self.previous_positions = np.array(self.positions)
         self.velocities = np.zeros_like(self.previous_positions)
         self.collision_ms = 0.0
+
+    def _make_lcp(self, depsgraph, head_matrix):
+        """Bando 2003 §3.2: particles sampled over the scalp group of the head, the hair's
+        length at each scalp point from the groom's nearest strand."""
+        params = properties_module().native_params(self.settings.lcp, self.native.LcpParams)
+        scalp_vertices, scalp_triangles = scalp_patch(self.head, depsgraph, self.settings.lcp_scalp)
+        weights, params.max_length = length_weights(self.groom, scalp_vertices)
+        particles = self.native.sample_lcp_particles(params, scalp_vertices, scalp_triangles,
+                                                     weights)
+        return self.native.LcpSolver(params, particles["positions"], particles["directions"],
+                                     particles["u"], particles["v"], particles["s"], head_matrix)
 
     def _make_children(self, params, head_mesh):
         """Kurihara 1993 §4: child hairs clustered around the guides, or spread over the
@@ -141,8 +235,9 @@ class Simulation:
 
     @property
     def positions(self):
-        """World-space positions (N, 3) float32, a zero-copy view of the solver's buffer."""
-        return self.solver.positions
+        """World-space strand positions (N, 3) float32: the solver's buffer (zero-copy), or
+        for LCP the strands carried by the particles."""
+        return self.solver.positions if self.skin is None else self.strand_positions
 
     def step(self, depsgraph, frame_dt):
         """Advance to the scene's current frame; returns the native stepping time in ms
@@ -155,7 +250,9 @@ class Simulation:
         start = time.perf_counter()
         self.solver.step(frame_dt, head_matrix)
         elapsed_ms = (time.perf_counter() - start) * 1000.0
-        positions = self.solver.positions
+        if self.skin is not None:
+            self.strand_positions = self.skin.apply(self.solver.positions, head_matrix)
+        positions = self.positions
         self.velocities = (positions - self.previous_positions) / np.float32(frame_dt)
         self.previous_positions[:] = positions
         if self.children is not None:
@@ -164,16 +261,16 @@ class Simulation:
 
     def stretch(self):
         return self.native.max_relative_stretch(self.groom.curve_offsets,
-                                                self.groom.positions_wo, self.solver.positions)
+                                                self.groom.positions_wo, self.positions)
 
     def nonfinite_points(self):
-        return self.native.count_nonfinite(self.solver.positions)
+        return self.native.count_nonfinite(self.positions)
 
     def penetration(self):
         """Exact penetration of the strands into the colliders' real triangles, or None."""
         if self.colliders is None:
             return None
-        return self.colliders.penetration(self.solver.positions)
+        return self.colliders.penetration(self.positions)
 
     def frame_arrays(self):
         """Everything a frame produces, by name: what the cache stores and the outputs show.
@@ -182,7 +279,7 @@ class Simulation:
         if broken:
             raise HairdynError(f"The simulation of '{self.hair_obj.name}' produced {broken} "
                                "points that are not finite numbers")
-        positions = self.solver.positions
+        positions = self.positions
         return {
             "position": positions,
             "velocity": self.velocities,
@@ -200,15 +297,28 @@ class Simulation:
             return None
         return np.asarray(self.children.curve_offsets), self.children.positions
 
+    def particle_arrays(self):
+        """LCP: the particles and their attributes (Bando 2003 §4: direction t, density, u, v,
+        s), or None for the strand methods."""
+        if self.skin is None:
+            return None
+        solver = self.solver
+        return {"position": solver.positions, "direction": solver.directions,
+                "velocity": solver.velocities, "density": solver.density,
+                "u": solver.u, "v": solver.v, "s": solver.s}
+
     def write(self, arrays):
-        """A frame's arrays, and the child hairs, into the output objects."""
-        write_outputs(self.hair_obj, self.groom.curve_offsets, arrays, self.children_arrays())
+        """A frame's arrays, and the child hairs, into the output objects; for LCP the point
+        output shows the particles instead of the strand points."""
+        write_outputs(self.hair_obj, self.groom.curve_offsets, arrays, self.children_arrays(),
+                      self.particle_arrays())
 
 
-def write_outputs(hair_obj, curve_offsets, arrays, children=None):
+def write_outputs(hair_obj, curve_offsets, arrays, children=None, points=None):
     """A frame's arrays into the hair object's output objects (created when missing):
     positions into the output Curves, all arrays as point attributes of the output mesh, and
-    children=(curve_offsets, positions) into the child-hair Curves."""
+    children=(curve_offsets, positions) into the child-hair Curves. `points` (arrays of
+    other points, LCP's particles) replace the strand points in the point output."""
     settings, name = hair_obj.hairdyn, hair_obj.name
     if children is not None:
         settings.output_children = bridge.ensure_curves_output(
@@ -218,10 +328,10 @@ def write_outputs(hair_obj, curve_offsets, arrays, children=None):
         settings.output_curves, f"{name}_hairdyn", curve_offsets, like=hair_obj)
     settings.output_points = bridge.ensure_points_output(
         settings.output_points, f"{name}_hairdyn_points", like=hair_obj)
-    positions = arrays["position"]
-    bridge.write_curves(settings.output_curves, positions)
-    bridge.write_points(settings.output_points, positions,
-                        {key: value for key, value in arrays.items() if key != "position"})
+    bridge.write_curves(settings.output_curves, arrays["position"])
+    shown = arrays if points is None else points
+    bridge.write_points(settings.output_points, shown["position"],
+                        {key: value for key, value in shown.items() if key != "position"})
 
 
 def frame_dt(scene):
@@ -329,6 +439,10 @@ class Runner:
             "total_s": time.perf_counter() - self.start_time,
             "nan_frames": self.nan_frames,
             "stretch_max": float(self.stretch_max),
+            **({"particles": simulation.solver.particles_num,
+                "pairs": simulation.solver.pairs_num,
+                "interpenetrating_pairs": simulation.solver.interpenetrating_pairs_num}
+               if simulation.skin is not None else {}),
             "collision": simulation.colliders is not None,
             "colliders": simulation.colliders.names if simulation.colliders else [],
             "penetration_max": float(self.penetration_max),
@@ -377,6 +491,9 @@ def start_bake(context, hair_obj, resume_after=None):
     from . import properties
 
     settings = hair_obj.hairdyn
+    if settings.method == 'LCP':
+        raise HairdynError("Baking LCP to a cache is not supported yet: it plays live, and "
+                           "Simulate Frame Range runs it")
     directory = cache_directory(hair_obj)
     parameters = properties.settings_dict(settings)
     settings.enabled = True  # a baked object plays its bake back

@@ -133,6 +133,74 @@ class HAIRDYN_PT_children(_SubPanel, bpy.types.Panel):
         layout.prop(strands, "seed")
 
 
+class HAIRDYN_PT_lcp(_SubPanel, bpy.types.Panel):
+    bl_label = "Loosely Connected Particles"
+    bl_options = set()
+    methods = {'LCP'}
+
+    def draw_settings(self, layout, settings):
+        lcp = settings.lcp
+        obj = settings.id_data
+        head = settings.head or (obj.data.surface if obj.type == 'CURVES' else obj)
+        if head is not None and head.type == 'MESH':
+            layout.prop_search(settings, "lcp_scalp", head, "vertex_groups", text="Scalp")
+        else:
+            layout.prop(settings, "lcp_scalp")
+        column = layout.column(align=True)
+        column.prop(lcp, "particle_spacing")
+        column.prop(lcp, "particle_num")
+        column.prop(lcp, "root_depth")
+        column.prop(lcp, "beam_length")
+        layout.prop(lcp, "substeps")
+        for name in ("h1", "a0", "neighbor_num", "young_modulus", "material_density",
+                     "spring_damping", "hair_density"):
+            layout.prop(lcp, name)
+
+
+class HAIRDYN_PT_lcp_interactions(_SubPanel, bpy.types.Panel):
+    bl_label = "Hair-Hair Interactions"
+    methods = {'LCP'}
+
+    def draw_settings(self, layout, settings):
+        lcp = settings.lcp
+        layout.prop(lcp, "h2")
+        layout.prop(lcp, "attraction_repulsion")
+        column = layout.column(align=True)
+        column.active = lcp.attraction_repulsion
+        column.prop(lcp, "pressure_stiffness")
+        column.prop(lcp, "rest_density")
+        layout.prop(lcp, "hair_collision")
+        row = layout.row()
+        row.active = lcp.hair_collision
+        row.prop(lcp, "collision_damping")
+        layout.prop(lcp, "hair_friction")
+        row = layout.row()
+        row.active = lcp.hair_friction
+        row.prop(lcp, "friction_damping")
+
+
+class HAIRDYN_PT_lcp_forces(_SubPanel, bpy.types.Panel):
+    bl_label = "Forces and Wind"
+    methods = {'LCP'}
+
+    def draw_settings(self, layout, settings):
+        lcp = settings.lcp
+        for name in ("gravity", "air_friction", "body_friction", "wind_speed", "wind_heading",
+                     "wind_particle_spacing", "wind_drag", "air_density"):
+            layout.prop(lcp, name)
+
+
+class HAIRDYN_PT_lcp_initial(_SubPanel, bpy.types.Panel):
+    bl_label = "Initial Shape"
+    methods = {'LCP'}
+
+    def draw_settings(self, layout, settings):
+        lcp = settings.lcp
+        for name in ("max_length", "root_tangent_weight", "root_normal_weight", "whorl_u",
+                     "whorl_v", "seed"):
+            layout.prop(lcp, name)
+
+
 class HAIRDYN_UL_colliders(bpy.types.UIList):
     def draw_item(self, _context, layout, _data, item, _icon, _active_data, _active_prop,
                   _index=0, _flt_flag=0):
@@ -188,4 +256,6 @@ class HAIRDYN_PT_output(_SubPanel, bpy.types.Panel):
 
 
 panel_classes = (HAIRDYN_UL_colliders, HAIRDYN_PT_main, HAIRDYN_PT_dynamics, HAIRDYN_PT_wind,
-                 HAIRDYN_PT_children, HAIRDYN_PT_collision, HAIRDYN_PT_cache, HAIRDYN_PT_output)
+                 HAIRDYN_PT_children, HAIRDYN_PT_lcp, HAIRDYN_PT_lcp_interactions,
+                 HAIRDYN_PT_lcp_forces, HAIRDYN_PT_lcp_initial, HAIRDYN_PT_collision,
+                 HAIRDYN_PT_cache, HAIRDYN_PT_output)

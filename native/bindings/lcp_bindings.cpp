@@ -2,6 +2,9 @@
 #include "bindings/arrays.hh"
 #include "bindings/params.hh"
 
+#include <algorithm>
+
+#include "collision/collider.hh"
 #include "groom/groom.hh"
 #include "lcp/lcp_solver.hh"
 #include "lcp/sampling_bando2003.hh"
@@ -144,8 +147,11 @@ void bind_lcp(py::module_ &m)
         if (!error.empty()) {
           fail("Invalid length map or scalp: " + error + ".");
         }
-        if (particles.size() == 0) {
-          fail("No particles: the particle spacing is too large for this scalp and length map.");
+        if (particles.size() == 0 ||
+            std::none_of(particles.s.begin(), particles.s.end(), [](float s) { return s < 0.0f; }))
+        {
+          fail("No particles at the roots: the particle spacing is too large for this scalp and "
+               "length map.");
         }
         return particles_dict(std::move(particles));
       },
@@ -223,6 +229,28 @@ void bind_lcp(py::module_ &m)
           py::arg("frame_dt"), py::arg("head_to_world"),
           "Advance one frame of frame_dt seconds to the head's transform.")
       .def("reset", &LcpSolver::reset, py::call_guard<py::gil_scoped_release>())
+      .def(
+          "set_colliders",
+          [](LcpSolver &self, const ColliderSet *colliders) {
+            if (colliders == nullptr) {
+              self.set_body_contact({});
+              return;
+            }
+            /* Body collision (Bando 2003 §3.5) through the cylindrical / spherical maps. */
+            self.set_body_contact([colliders](const vec3 &p_wo, LcpContact &r_contact) {
+              Contact contact;
+              if (!colliders->find_contact(p_wo, contact)) {
+                return false;
+              }
+              r_contact.depth = contact.depth;
+              r_contact.normal_wo = contact.normal_wo;
+              r_contact.surface_point_wo = contact.surface_point_wo;
+              return true;
+            });
+          },
+          py::arg("colliders"), py::keep_alive<1, 2>(),
+          "Collide with a ColliderSet (kept alive by the solver; its transforms must be at the "
+          "rest frame now), or None. Rest particles inside a body move onto its surface.")
       .def_property_readonly("particles_num", &LcpSolver::particles_num)
       .def_property_readonly("pairs_num", &LcpSolver::pairs_num)
       .def_property_readonly("interpenetrating_pairs_num", &LcpSolver::interpenetrating_pairs_num,
