@@ -196,19 +196,21 @@ def test_strand_bake_plays_back_guides_and_children(saved_shake):
     bpy.context.view_layer.objects.active = hair
     assert bpy.ops.hairdyn.bake() == {'FINISHED'}
     cache = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
-    assert cache.manifest["solver"] == "strands" and cache.has_children
-    assert cache.manifest["children"] == {"curves": 900, "points": 900 * 9}
+    assert cache.manifest["solver"] == "strands" and set(cache.streams) == {"children"}
+    assert cache.streams["children"].points_num == 900 * 9
+    assert len(cache.stream_offsets("children")) == 900 + 1
     for frame in (9, 4):
         bpy.context.scene.frame_set(frame)
         graph = bpy.context.evaluated_depsgraph_get()
         guides = bridge.read_curves(hair.hairdyn.output_curves, graph).positions_wo
         children = bridge.read_curves(hair.hairdyn.output_children, graph).positions_wo
         assert np.array_equal(guides, cache.read_frame(frame)["position"])
-        assert np.array_equal(children, cache.read_children(frame))
-    assert not np.array_equal(cache.read_children(4), cache.read_children(9))  # it moves
-    cache.children_path(7).write_bytes(b"torn")
+        assert np.array_equal(children, cache.read_stream("children", frame)["position"])
+    assert not np.array_equal(cache.read_stream("children", 4)["position"],
+                              cache.read_stream("children", 9)["position"])  # it moves
+    cache.path("children", 7).write_bytes(b"torn")
     with pytest.raises(CacheError, match="children_000007.npy' is corrupted or truncated"):
-        cache.read_children(7)
+        cache.read_stream("children", 7)
 
 
 def test_object_deleted_during_a_bake_keeps_the_frames(saved_shake):

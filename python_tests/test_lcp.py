@@ -68,8 +68,23 @@ def test_lcp_bad_values_are_refused(open_fixture):
         simulation.run(bpy.context, hair, 1, 2)
 
 
-def test_lcp_bake_is_refused_with_a_reason(open_fixture, tmp_path):
+def test_lcp_bakes_and_plays_back_its_particles(open_fixture, tmp_path):
     hair = lcp_hair(open_fixture, "head_curves.blend")
     hair.hairdyn.cache_directory = str(tmp_path)
-    with pytest.raises(HairdynError, match="Baking LCP to a cache is not supported yet"):
-        simulation.start_bake(bpy.context, hair)
+    hair.hairdyn.frame_end = 6
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    from hairdyn.cache import Cache
+
+    cache = Cache.open(tmp_path / "Hair")
+    assert cache.manifest["solver"] == "lcp" and set(cache.streams) == {"particles"}
+    assert cache.frames() == list(range(1, 7))
+    bpy.context.scene.frame_set(4)
+    mesh = hair.hairdyn.output_points.data
+    particles = cache.read_stream("particles", 4)
+    assert len(mesh.vertices) == len(particles["position"])
+    seen = np.empty_like(particles["density"])
+    mesh.attributes["density"].data.foreach_get("value", seen)
+    assert np.array_equal(seen, particles["density"])
+    strands = bridge.read_curves(hair.hairdyn.output_curves, depsgraph()).positions_wo
+    assert np.array_equal(strands, cache.read_frame(4)["position"])

@@ -1,18 +1,20 @@
-"""The bake cache on disk: one .npy per frame and a manifest.json.
+"""The bake cache on disk: one .npy per frame and stream, and a manifest.json.
 
-    <directory>/manifest.json        format, version, solver, parameters, topology, columns,
-                                     frame range, timings
-    <directory>/curve_offsets.npy    (C + 1,) int32: the topology, so playback can rebuild the
-                                     output objects
-    <directory>/children_offsets.npy (K + 1,) int32 and children_000012.npy (M, 3) float32:
-                                     child hairs, when the solver makes them (written before
-                                     the frame file, so a frame file means a complete frame)
-    <directory>/frame_000012.npy     (N, C) float32: position, velocity and every output
-                                     attribute side by side, as the manifest's "columns" says
+    <directory>/manifest.json         format, version, solver, parameters, topology, streams,
+                                      frame range, timings
+    <directory>/curve_offsets.npy     (C + 1,) int32: the groom's topology, so playback can
+                                      rebuild the output objects
+    <directory>/frame_000012.npy      (N, C) float32: the strands' position, velocity and every
+                                      output attribute side by side, as the manifest's
+                                      "columns" says
+    <directory>/<stream>_000012.npy   the same for the other point sets a solver makes:
+                                      "children" (child hairs, with children_offsets.npy) and
+                                      "particles" (LCP's particles and their attributes)
 
-A frame file appears only complete: it is written to a temporary file, flushed to disk and
-renamed, so a crash never leaves a torn frame, and the frames present are the frames baked.
-A frame with a value that is not finite is refused before anything is written.
+Every file appears only complete: it is written to a temporary file, flushed to disk and
+renamed. A frame's stream files are written before its frame file, so the frame files present
+are the frames baked, whole. A frame with a value that is not finite is refused before
+anything is written.
 """
 import hashlib
 import json
@@ -26,6 +28,7 @@ from .errors import HairdynError
 
 FORMAT = "hairdyn-cache"
 VERSION = 1
+MAIN = "frame"  # file prefix of the strands' table
 _FRAME_FILE = re.compile(r"^frame_(-?\d{6,})\.npy$")
 
 
@@ -53,15 +56,64 @@ def _write_atomic(path, write):
         raise CacheError(f"Cannot write the cache file '{path}': {error.strerror or error}") from None
 
 
+def _spans(columns):
+    """{name: width} in order -> {name: [start, stop]} of a table's columns."""
+    spans, offset = {}, 0
+    for name, width in columns.items():
+        spans[name] = [offset, offset + width]
+        offset += width
+    return spans
+
+
+class _Layout:
+    """One table per frame: points_num rows, named column spans."""
+
+    def __init__(self, prefix, points_num, spans):
+        self.prefix = prefix
+        self.points_num = points_num
+        self.columns = {name: tuple(span) for name, span in spans.items()}
+        self.width = max(stop for _, stop in self.columns.values())
+
+    def pack(self, frame, arrays):
+        table = np.empty((self.points_num, self.width), dtype=np.float32)
+        for name, (start, stop) in self.columns.items():
+            if name not in arrays:
+                raise CacheError(f"Frame {frame}: the {self.prefix} data has no '{name}'; it was "
+                                 "not written")
+            values = np.asarray(arrays[name], dtype=np.float32)
+            if values.size != self.points_num * (stop - start):
+                raise CacheError(f"Frame {frame}: {self.prefix} '{name}' has {values.size} "
+                                 f"values, the cache holds {self.points_num * (stop - start)}; "
+                                 "it was not written")
+            table[:, start:stop] = values.reshape(self.points_num, stop - start)
+        if not np.isfinite(table).all():
+            bad = sorted(name for name, (start, stop) in self.columns.items()
+                         if not np.isfinite(table[:, start:stop]).all())
+            raise CacheError(f"Frame {frame} has values that are not finite numbers in "
+                             f"{', '.join(bad)}; it was not written to the cache")
+        return table
+
+    def unpack(self, path, table):
+        if table.dtype != np.float32 or table.shape != (self.points_num, self.width):
+            raise CacheError(f"The cache frame '{path}' holds {table.dtype} {table.shape}, the "
+                             f"manifest says float32 ({self.points_num}, {self.width})")
+        return {name: (table[:, start] if stop - start == 1 else table[:, start:stop])
+                for name, (start, stop) in self.columns.items()}
+
+
 class Cache:
     """A cache directory. Create with Cache.create() or open with Cache.open()."""
 
     def __init__(self, directory, manifest):
         self.directory = Path(directory)
         self.manifest = manifest
-        self.columns = {name: tuple(span) for name, span in manifest["columns"].items()}
-        self.width = max(stop for _, stop in self.columns.values())
-        self.points_num = manifest["topology"]["points"]
+        self.main = _Layout(MAIN, manifest["topology"]["points"], manifest["columns"])
+        self.streams = {name: _Layout(name, stream["points"], stream["columns"])
+                        for name, stream in manifest.get("streams", {}).items()}
+
+    @property
+    def columns(self):
+        return self.main.columns
 
     # -- manifest ------------------------------------------------------------------------------
 
@@ -71,8 +123,9 @@ class Cache:
 
     @classmethod
     def create(cls, directory, *, solver, parameters, curve_offsets, columns, frame_start,
-               frame_end, fps, children_offsets=None, extra=None):
-        """A new cache (frames of an older bake in `directory` are removed)."""
+               frame_end, fps, streams=None, extra=None):
+        """A new cache (an older bake in `directory` is removed). streams: name ->
+        {"points": M, "columns": {name: width}, "offsets": (K + 1,) int32 or None}."""
         directory = Path(directory)
         try:
             directory.mkdir(parents=True, exist_ok=True)
@@ -81,11 +134,7 @@ class Cache:
                              f"{error.strerror or error}") from None
         if not os.access(directory, os.W_OK):
             raise CacheError(f"The cache directory '{directory}' is not writable")
-        offset = 0
-        spans = {}
-        for name, width in columns.items():
-            spans[name] = [offset, offset + width]
-            offset += width
+        streams = streams or {}
         manifest = {
             "format": FORMAT,
             "version": VERSION,
@@ -93,22 +142,23 @@ class Cache:
             "parameters": parameters,
             "topology": {"curves": int(len(curve_offsets) - 1), "points": int(curve_offsets[-1]),
                          "hash": topology_hash(curve_offsets)},
-            "columns": spans,
+            "columns": _spans(columns),
+            "streams": {name: {"points": int(stream["points"]),
+                               "columns": _spans(stream["columns"]),
+                               "has_offsets": stream.get("offsets") is not None}
+                        for name, stream in streams.items()},
             "frame_start": int(frame_start),
             "frame_end": int(frame_end),
             "fps": fps,
             "timings": {},
-            "children": None if children_offsets is None else {
-                "curves": int(len(children_offsets) - 1), "points": int(children_offsets[-1])},
             **(extra or {}),
         }
         cache = cls(directory, manifest)
         cache.free()
-        offsets = np.ascontiguousarray(curve_offsets, dtype=np.int32)
-        _write_atomic(directory / "curve_offsets.npy", lambda file: np.save(file, offsets))
-        if children_offsets is not None:
-            children = np.ascontiguousarray(children_offsets, dtype=np.int32)
-            _write_atomic(directory / "children_offsets.npy", lambda file: np.save(file, children))
+        cache._save_array("curve_offsets.npy", curve_offsets)
+        for name, stream in streams.items():
+            if stream.get("offsets") is not None:
+                cache._save_array(f"{name}_offsets.npy", stream["offsets"])
         cache.save_manifest()
         return cache
 
@@ -133,13 +183,16 @@ class Cache:
             raise CacheError(f"The cache manifest '{path}' is incomplete ({error})") from None
 
     def free(self):
-        """Removes every file of this cache (frames, topology, manifest)."""
-        for frame in self.frames():
-            self.frame_path(frame).unlink(missing_ok=True)
-        for path in self.directory.glob("children_*.npy"):
+        """Removes every file of this cache (frames, streams, topology, manifest)."""
+        if not self.directory.is_dir():
+            return
+        for path in self.directory.glob("*.npy"):
             path.unlink(missing_ok=True)
-        (self.directory / "curve_offsets.npy").unlink(missing_ok=True)
         self.manifest_path(self.directory).unlink(missing_ok=True)
+
+    def _save_array(self, name, array):
+        values = np.ascontiguousarray(array, dtype=np.int32)
+        _write_atomic(self.directory / name, lambda file: np.save(file, values))
 
     def _load(self, path, what):
         try:
@@ -156,31 +209,14 @@ class Cache:
             raise CacheError(f"The cache topology '{path}' does not match its manifest")
         return offsets
 
-    @property
-    def has_children(self):
-        return bool(self.manifest.get("children"))
-
-    def children_offsets(self):
-        path = self.directory / "children_offsets.npy"
-        offsets = self._load(path, "child topology")
-        expected = self.manifest["children"]
-        if offsets.dtype != np.int32 or len(offsets) != expected["curves"] + 1 or \
-                offsets[-1] != expected["points"]:
-            raise CacheError(f"The cache child topology '{path}' does not match its manifest")
+    def stream_offsets(self, name):
+        """The curve offsets of a stream of curves (e.g. "children")."""
+        path = self.directory / f"{name}_offsets.npy"
+        offsets = self._load(path, f"{name} topology")
+        if offsets.dtype != np.int32 or offsets.ndim != 1 or \
+                offsets[-1] != self.streams[name].points_num:
+            raise CacheError(f"The cache {name} topology '{path}' does not match its manifest")
         return offsets
-
-    def children_path(self, frame):
-        return self.directory / f"children_{int(frame):06d}.npy"
-
-    def read_children(self, frame):
-        """(M, 3) float32 child hair positions of a frame."""
-        path = self.children_path(frame)
-        positions = self._load(path, "child frame")
-        if positions.dtype != np.float32 or positions.shape != (self.manifest["children"]["points"], 3):
-            raise CacheError(f"The cache child frame '{path}' holds {positions.dtype} "
-                             f"{positions.shape}, the manifest says float32 "
-                             f"({self.manifest['children']['points']}, 3)")
-        return positions
 
     def last_contiguous_frame(self):
         """The last frame of the unbroken run of frames from frame_start, or None."""
@@ -207,8 +243,11 @@ class Cache:
 
     # -- frames --------------------------------------------------------------------------------
 
+    def path(self, prefix, frame):
+        return self.directory / f"{prefix}_{int(frame):06d}.npy"
+
     def frame_path(self, frame):
-        return self.directory / f"frame_{int(frame):06d}.npy"
+        return self.path(MAIN, frame)
 
     def frames(self):
         """Frames on disk, sorted."""
@@ -220,25 +259,14 @@ class Cache:
     def has_frame(self, frame):
         return self.frame_path(frame).is_file()
 
-    def write_frame(self, frame, arrays, children_positions=None):
-        """arrays: name -> (N,) or (N, k) array for every column of the manifest; the child
-        hairs' (M, 3) positions when the cache has children."""
-        table = np.empty((self.points_num, self.width), dtype=np.float32)
-        for name, (start, stop) in self.columns.items():
-            values = np.asarray(arrays[name], dtype=np.float32)
-            table[:, start:stop] = values.reshape(self.points_num, stop - start)
-        if not np.isfinite(table).all():
-            bad = sorted(name for name, (start, stop) in self.columns.items()
-                         if not np.isfinite(table[:, start:stop]).all())
-            raise CacheError(f"Frame {frame} has values that are not finite numbers in "
-                             f"{', '.join(bad)}; it was not written to the cache")
-        if self.has_children:
-            children = np.ascontiguousarray(children_positions, dtype=np.float32)
-            if children.shape != (self.manifest["children"]["points"], 3) or \
-                    not np.isfinite(children).all():
-                raise CacheError(f"Frame {frame} has child hairs of the wrong size or not "
-                                 "finite; it was not written to the cache")
-            _write_atomic(self.children_path(frame), lambda file: np.save(file, children))
+    def write_frame(self, frame, arrays, streams=None):
+        """arrays: name -> (N,) or (N, k) array for every column of the manifest; streams:
+        stream name -> its arrays, for every stream of the manifest."""
+        tables = {name: layout.pack(frame, (streams or {}).get(name, {}))
+                  for name, layout in self.streams.items()}
+        table = self.main.pack(frame, arrays)
+        for name, stream_table in tables.items():
+            _write_atomic(self.path(name, frame), lambda file, t=stream_table: np.save(file, t))
         _write_atomic(self.frame_path(frame), lambda file: np.save(file, table))
 
     def read_frame(self, frame):
@@ -246,9 +274,9 @@ class Cache:
         path = self.frame_path(frame)
         if not path.is_file():
             raise CacheError(f"Frame {frame} is not in the cache ('{path}' is missing)")
-        table = self._load(path, "frame")
-        if table.dtype != np.float32 or table.shape != (self.points_num, self.width):
-            raise CacheError(f"The cache frame '{path}' holds {table.dtype} {table.shape}, the "
-                             f"manifest says float32 ({self.points_num}, {self.width})")
-        return {name: (table[:, start] if stop - start == 1 else table[:, start:stop])
-                for name, (start, stop) in self.columns.items()}
+        return self.main.unpack(path, self._load(path, "frame"))
+
+    def read_stream(self, name, frame):
+        """name -> array of one stream for one frame, or CacheError naming the file."""
+        path = self.path(name, frame)
+        return self.streams[name].unpack(path, self._load(path, f"{name} frame"))

@@ -56,7 +56,7 @@ def open_cache(directory):
     if known is None or known[0] != mtime:
         cache = Cache.open(directory)
         known = (mtime, cache, cache.curve_offsets(),
-                 cache.children_offsets() if cache.has_children else None)
+                 cache.stream_offsets("children") if "children" in cache.streams else None)
         _open_caches[str(directory)] = known
     return known[1:]
 
@@ -76,8 +76,9 @@ def load_frame(obj, frame):
     if not cache.has_frame(frame):
         return False
     children = None if children_offsets is None else \
-        (children_offsets, cache.read_children(frame))
-    simulation.write_outputs(obj, curve_offsets, cache.read_frame(frame), children)
+        (children_offsets, cache.read_stream("children", frame)["position"])
+    particles = cache.read_stream("particles", frame) if "particles" in cache.streams else None
+    simulation.write_outputs(obj, curve_offsets, cache.read_frame(frame), children, particles)
     return True
 
 

@@ -297,6 +297,30 @@ class Simulation:
             return None
         return np.asarray(self.children.curve_offsets), self.children.positions
 
+    def frame_streams(self):
+        """The point sets besides the strands that a frame produces, by stream name: "children"
+        (child hairs) and "particles" (LCP), as the cache stores them."""
+        streams = {}
+        if self.children is not None:
+            streams["children"] = {"position": self.children.positions}
+        particles = self.particle_arrays()
+        if particles is not None:
+            streams["particles"] = particles
+        return streams
+
+    def stream_layouts(self):
+        """What Cache.create needs to know of frame_streams()."""
+        layouts = {}
+        if self.children is not None:
+            offsets = np.asarray(self.children.curve_offsets)
+            layouts["children"] = {"points": int(offsets[-1]), "columns": {"position": 3},
+                                   "offsets": offsets}
+        if self.skin is not None:
+            layouts["particles"] = {"points": self.solver.particles_num, "columns": {
+                "position": 3, "direction": 3, "velocity": 3, "density": 1, "u": 1, "v": 1,
+                "s": 1}}
+        return layouts
+
     def particle_arrays(self):
         """LCP: the particles and their attributes (Bando 2003 §4: direction t, density, u, v,
         s), or None for the strand methods."""
@@ -411,8 +435,7 @@ class Runner:
             self.checked_num += penetration["points_num"]
         arrays = self.simulation.frame_arrays()
         if self.cache is not None:
-            children = self.simulation.children_arrays()
-            self.cache.write_frame(frame, arrays, None if children is None else children[1])
+            self.cache.write_frame(frame, arrays, self.simulation.frame_streams())
         self.simulation.write(arrays)
         return frame, ms
 
@@ -491,9 +514,6 @@ def start_bake(context, hair_obj, resume_after=None):
     from . import properties
 
     settings = hair_obj.hairdyn
-    if settings.method == 'LCP':
-        raise HairdynError("Baking LCP to a cache is not supported yet: it plays live, and "
-                           "Simulate Frame Range runs it")
     directory = cache_directory(hair_obj)
     parameters = properties.settings_dict(settings)
     settings.enabled = True  # a baked object plays its bake back
@@ -519,8 +539,7 @@ def start_bake(context, hair_obj, resume_after=None):
         curve_offsets=runner.simulation.groom.curve_offsets,
         columns=runner.simulation.frame_columns(), frame_start=settings.frame_start,
         frame_end=settings.frame_end, fps=1.0 / runner.dt,
-        children_offsets=None if runner.simulation.children is None else
-        np.asarray(runner.simulation.children.curve_offsets),
+        streams=runner.simulation.stream_layouts(),
         extra={"object": hair_obj.name})
     playback.forget(directory)
     return runner
