@@ -20,6 +20,11 @@ def test_paper_presets_apply(open_fixture):
     assert hair.hairdyn.strands.integrator == 'EXPLICIT'
     assert hair.hairdyn.collision.map_kind == 'CYLINDER'
     assert (hair.hairdyn.collision.azimuth_num, hair.hairdyn.collision.height_num) == (40, 40)
+    hair.hairdyn.lcp.neighbor_num = 5
+    bpy.ops.script.execute_preset(filepath=str(folder / "bando_2003.py"),
+                                  menu_idname="HAIRDYN_MT_presets")
+    assert hair.hairdyn.method == 'LCP'
+    assert (hair.hairdyn.lcp.a0, hair.hairdyn.lcp.neighbor_num) == (0.5, 12)
 
 
 def test_user_preset_round_trip(open_fixture):
