@@ -88,3 +88,30 @@ def test_lcp_bakes_and_plays_back_its_particles(open_fixture, tmp_path):
     assert np.array_equal(seen, particles["density"])
     strands = bridge.read_curves(hair.hairdyn.output_curves, depsgraph()).positions_wo
     assert np.array_equal(strands, cache.read_frame(4)["position"])
+
+
+def test_billboards_follow_the_hair_direction(open_fixture):
+    """Bando 2003 §4: one card per particle, its long axis along the particle's direction t,
+    its width across the view."""
+    hair = lcp_hair(open_fixture, "head_curves.blend")
+    simulation.run(bpy.context, hair, 1, 2)
+    points = hair.hairdyn.output_points
+    assert points.modifiers.get("hairdyn Billboards") is not None
+    mesh = points.data
+    direction = np.empty((len(mesh.vertices), 3), np.float32)
+    mesh.attributes["direction"].data.foreach_get("vector", direction.ravel())
+    positions = np.empty_like(direction)
+    mesh.vertices.foreach_get("co", positions.ravel())
+    graph = depsgraph()
+    cards = [np.array(instance.matrix_world) for instance in graph.object_instances
+             if instance.is_instance and instance.parent is not None
+             and instance.parent.original == points]
+    assert len(cards) == len(mesh.vertices)
+    camera = np.array(bpy.context.scene.camera.matrix_world.translation)
+    for matrix in cards[::25]:
+        index = np.argmin(np.linalg.norm(positions - matrix[:3, 3], axis=1))
+        along = matrix[:3, 2] / np.linalg.norm(matrix[:3, 2])
+        across = matrix[:3, 0] / np.linalg.norm(matrix[:3, 0])
+        assert abs(np.dot(along, direction[index])) > 0.999
+        to_camera = camera - matrix[:3, 3]
+        assert abs(np.dot(across, to_camera / np.linalg.norm(to_camera))) < 1e-3

@@ -16,13 +16,13 @@ if "bpy" in locals():
     import importlib
 
     for _module in (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: F821
-                    simulation, operators, io_import, presets, ui):  # noqa: F821
+                    simulation, operators, io_import, presets, billboards, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy
 
 from . import (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: E402
-               simulation, operators, io_import, presets, ui)
+               simulation, operators, io_import, presets, billboards, ui)
 
 classes = (
     properties.HairdynStrandSettings,

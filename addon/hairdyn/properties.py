@@ -294,6 +294,10 @@ class HairdynSettings(bpy.types.PropertyGroup):
                     "or the mesh that emits the particle hair")
     strands: PointerProperty(type=HairdynStrandSettings, name="Strand Settings")
     lcp: PointerProperty(type=HairdynLcpSettings, name="LCP Settings")
+    use_billboards: BoolProperty(
+        name="Billboards", default=True,
+        description="Show LCP particles as hair-textured cards along the hair direction, "
+                    "faded by 1/sin θ (Bando 2003 §4), in the viewport and in Cycles")
     lcp_scalp: StringProperty(
         name="Scalp", default="scalp",
         description="Vertex group of the head that LCP samples the hair volume over (Bando "
@@ -348,7 +352,8 @@ class HairdynSettings(bpy.types.PropertyGroup):
 def settings_dict(settings):
     """The solver parameters of a settings group as plain values (for a cache manifest):
     every property but object pointers and the cache's own settings."""
-    skip = {"rna_type", "name", "enabled", "head", "collider_index", "output_children", "output_curves", "output_points", "cache_directory",
+    skip = {"rna_type", "name", "enabled", "head", "collider_index", "output_children",
+            "use_billboards", "output_curves", "output_points", "cache_directory",
             "use_cache", "use_live"}
     result = {}
     for prop in settings.bl_rna.properties:

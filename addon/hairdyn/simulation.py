@@ -356,6 +356,12 @@ def write_outputs(hair_obj, curve_offsets, arrays, children=None, points=None):
     shown = arrays if points is None else points
     bridge.write_points(settings.output_points, shown["position"],
                         {key: value for key, value in shown.items() if key != "position"})
+    if points is not None and settings.use_billboards:
+        import bpy
+
+        from . import billboards
+
+        billboards.ensure(settings.output_points, bpy.context.scene.camera)
 
 
 def frame_dt(scene):

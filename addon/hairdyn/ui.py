@@ -251,6 +251,8 @@ class HAIRDYN_PT_output(_SubPanel, bpy.types.Panel):
     def draw_settings(self, layout, settings):
         layout.prop(settings, "output_curves")
         layout.prop(settings, "output_points")
+        if settings.method == 'LCP':
+            layout.prop(settings, "use_billboards")
         if settings.method == 'STRANDS':
             layout.prop(settings, "output_children")
 
