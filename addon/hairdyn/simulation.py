@@ -9,9 +9,10 @@ the operators, the headless entry point and the bake; playback steps live.
 import time
 from pathlib import Path
 
+import bpy
 import numpy as np
 
-from . import bridge, native, playback
+from . import billboards, bridge, native, playback, properties
 from .cache import Cache
 from .errors import HairdynError
 
@@ -87,12 +88,6 @@ def scalp_points(groom, head_mesh, count, seed):
     return np.ascontiguousarray(points, dtype=np.float32)
 
 
-def properties_module():
-    from . import properties
-
-    return properties
-
-
 def scalp_patch(head, depsgraph, group_name):
     """The scalp as a mesh of its own (Bando 2003 §3.2): world-space vertices and triangles of
     the head's faces whose corners all lie in the vertex group."""
@@ -166,7 +161,7 @@ class Simulation:
     frame_arrays() once per frame."""
 
     def __init__(self, hair_obj, depsgraph, scene):
-        from . import colliders, properties
+        from . import colliders
 
         self.native = native.load()
         self.hair_obj = hair_obj
@@ -196,12 +191,12 @@ class Simulation:
                 raise HairdynError(f"Unknown method '{self.method}'")
         except ValueError as error:
             raise HairdynError(f"'{hair_obj.name}': {error}") from None
-        if settings.use_collision:
+        if settings.use_collision:  # Follow Head only reports penetration
             self.colliders = colliders.Colliders(hair_obj, self.head, scene, depsgraph)
-            if self.method == 'LCP':  # moves rest particles out of the body: skin after it
-                self.solver.set_colliders(self.colliders.set)
-            elif hasattr(self.solver, "set_colliders"):
+            if self.method == 'STRANDS':
                 self.solver.set_colliders(self.colliders.set, self.colliders.params)
+            elif self.method == 'LCP':  # moves rest particles out of the body: skin after it
+                self.solver.set_colliders(self.colliders.set)
         if self.method == 'LCP':
             self.skin = ParticleSkin(self.groom, np.array(self.solver.positions), head_matrix)
             self.strand_positions = self.skin.rest.copy()
@@ -212,7 +207,7 @@ class Simulation:
     def _make_lcp(self, depsgraph, head_matrix):
         """Bando 2003 §3.2: particles sampled over the scalp group of the head, the hair's
         length at each scalp point from the groom's nearest strand."""
-        params = properties_module().native_params(self.settings.lcp, self.native.LcpParams)
+        params = properties.native_params(self.settings.lcp, self.native.LcpParams)
         scalp_vertices, scalp_triangles = scalp_patch(self.head, depsgraph, self.settings.lcp_scalp)
         weights, params.max_length = length_weights(self.groom, scalp_vertices)
         particles = self.native.sample_lcp_particles(params, scalp_vertices, scalp_triangles,
@@ -357,10 +352,6 @@ def write_outputs(hair_obj, curve_offsets, arrays, children=None, points=None):
     bridge.write_points(settings.output_points, shown["position"],
                         {key: value for key, value in shown.items() if key != "position"})
     if points is not None and settings.use_billboards:
-        import bpy
-
-        from . import billboards
-
         billboards.ensure(settings.output_points, bpy.context.scene.camera)
 
 
@@ -447,8 +438,6 @@ class Runner:
 
     def report(self):
         """The figures every solver reports (see README, "Headless runs")."""
-        import bpy
-
         simulation = self.simulation
         try:
             settings = self.hair_obj.hairdyn
@@ -499,8 +488,6 @@ def run(context, hair_obj, frame_start, frame_end, on_frame=None):
 
 def cache_directory(hair_obj):
     """The object's bake folder: <cache_directory>/<object name>, `//` relative to the .blend."""
-    import bpy
-
     base = hair_obj.hairdyn.cache_directory
     if not base:
         raise HairdynError("Set a cache folder in the hairdyn panel")
@@ -517,8 +504,6 @@ def start_bake(context, hair_obj, resume_after=None):
     keeps the cached frames up to that frame and continues after it; this needs an unbroken
     run of cached frames from the start to there, baked with the same parameters.
     """
-    from . import properties
-
     settings = hair_obj.hairdyn
     directory = cache_directory(hair_obj)
     parameters = properties.settings_dict(settings)
