@@ -86,6 +86,7 @@ inline LcpParams params_for_spacing(const float r)
 {
   LcpParams params;
   params.particle_spacing = r;
+  params.particle_num = 0; /* the scenes are defined by their spacing */
   params.h1 = 1.33f * r;
   params.h2 = 0.92f * r;
   return params;

@@ -16,9 +16,20 @@ def lcp_hair(open_fixture, fixture="head_shake.blend"):
     """The fixture's groom on LCP, with particles coarse enough for a quick test."""
     open_fixture(fixture)
     hair = bpy.data.objects["Hair"]
-    cli.apply_settings(hair.hairdyn, ["method=lcp", "particle_spacing=0.02", "h1=0.027",
-                                      "h2=0.018"])
+    cli.apply_settings(hair.hairdyn, ["method=lcp", "particle_num=0", "particle_spacing=0.02",
+                                      "h1=0.027", "h2=0.018"])
     return hair
+
+
+def test_lcp_defaults_run_the_shipped_example(open_fixture):
+    """The defaults (about 2,000 particles, as Bando 2003 used) on the fixture: a sane run."""
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    hair.hairdyn.method = 'LCP'
+    report = simulation.run(bpy.context, hair, 1, 6)
+    assert report["particles"] == 2000 and report["nan_frames"] == 0
+    assert report["pairs"] > 4 * report["particles"]
+    assert report["penetration_share"] <= 0.005
 
 
 def test_lcp_runs_on_the_head_and_carries_the_strands(open_fixture):

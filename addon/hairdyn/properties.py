@@ -129,7 +129,7 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
         name='Particle Spacing (r)', default=0.012, min=0.0001, max=1.0, precision=4,
         description='r, m: Poisson-disc radius of the particles in the (u, v, s) distance of eq. 3')
     particle_num: IntProperty(
-        name='Particle Count (N)', default=0, min=0, max=10000000,
+        name='Particle Count (N)', default=2000, min=0, max=10000000,
         description='N: Target particle count (0: as many as the spacing allows)')
     root_depth: FloatProperty(
         name='Root Depth (s_r)', default=0.01, min=0.0, max=1.0, precision=4,

@@ -9,7 +9,8 @@ namespace hairdyn {
 struct LcpParams {
   /* ---- initialisation (§3.2) ---- */
   float particle_spacing = 0.012f; /* m, r: Poisson-disc radius in the distance of eq. 3. */
-  int32_t particle_num = 0;        /* N: target particle count; 0 = as many as `r` allows. */
+  /* N: target particle count; 0 = as many as `r` allows. Bando 2003 (§5) used about 2,000. */
+  int32_t particle_num = 2000;
   float root_depth = 0.01f;        /* m, s_r: depth of the hair roots beneath the scalp. */
   float max_length = 0.25f;        /* m, L_max: scales the length map L(u, v). */
   float root_tangent_weight = 0.3f; /* w_t of eq. 4: tilts roots away from the whorl. */
