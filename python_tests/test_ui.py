@@ -32,6 +32,7 @@ def test_panel_in_a_real_window(fixture, obj, artifacts, tmp_path):
     assert result["simulate"] == ["FINISHED"]
     assert result["bake_invoke"] == ["RUNNING_MODAL"]  # the modal bake, as from the button
     assert result["baked_frames"] == 10
+    assert result["playback_error"] is None
     assert sorted(p.name for p in (tmp_path / "cache" / obj).glob("frame_*.npy"))[-1] == \
         "frame_000010.npy"
     assert screenshot.is_file() and screenshot.stat().st_size > 10_000

@@ -95,6 +95,13 @@ def wait_for_bake():
         manifest = {}
     if manifest.get("complete"):
         result["baked_frames"] = manifest["report"]["frames"]
+        # Scrub like a user: the bake plays back, frames past it simulate live.
+        from hairdyn import playback
+
+        obj = bpy.data.objects[object_name]
+        for frame in (3, 1, 2):
+            bpy.context.scene.frame_set(frame)
+        result["playback_error"] = playback.last_error(obj)
         window, area = properties_area()
         with bpy.context.temp_override(window=window, screen=window.screen, area=area):
             bpy.ops.screen.screenshot(filepath=out_png.replace(".png", "_baked.png"))
