@@ -47,10 +47,13 @@ def install_bundled():
     look), without overwriting a file the user changed."""
     target = Path(bpy.utils.user_resource('SCRIPTS', path=f"presets/{PRESET_SUBDIR}",
                                           create=True))
-    for source in BUNDLED.glob("*.py"):
-        destination = target / source.name
-        if not destination.exists():
-            shutil.copyfile(source, destination)
+    try:
+        for source in BUNDLED.glob("*.py"):
+            destination = target / source.name
+            if not destination.exists():
+                shutil.copyfile(source, destination)
+    except OSError as error:  # a read-only user folder: the add-on still works, without them
+        print(f"hairdyn: the bundled presets could not be installed in '{target}': {error}")
     return target
 
 
