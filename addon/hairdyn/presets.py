@@ -45,9 +45,9 @@ class HAIRDYN_OT_preset_add(AddPresetBase, bpy.types.Operator):
 def install_bundled():
     """Copy the shipped presets into the user's preset folder (where Blender's preset menus
     look), without overwriting a file the user changed."""
-    target = Path(bpy.utils.user_resource('SCRIPTS', path=f"presets/{PRESET_SUBDIR}",
-                                          create=True))
+    target = Path(bpy.utils.user_resource('SCRIPTS', path=f"presets/{PRESET_SUBDIR}"))
     try:
+        target.mkdir(parents=True, exist_ok=True)
         for source in BUNDLED.glob("*.py"):
             destination = target / source.name
             if not destination.exists():
