@@ -126,16 +126,16 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
     """Mirrors native LcpParams (native/lcp/lcp_params.hh) field for field."""
 
     particle_spacing: FloatProperty(
-        name='Particle Spacing (r)', default=0.012, min=0.0001, max=1.0, precision=4,
+        name='Particle Spacing (r)', default=0.012, min=0.0001, max=1.0, precision=4, subtype='DISTANCE',
         description='r, m: Poisson-disc radius of the particles in the (u, v, s) distance of eq. 3')
     particle_num: IntProperty(
         name='Particle Count (N)', default=2000, min=0, max=10000000,
         description='N: Target particle count (0: as many as the spacing allows)')
     root_depth: FloatProperty(
-        name='Root Depth (s_r)', default=0.01, min=0.0, max=1.0, precision=4,
+        name='Root Depth (s_r)', default=0.01, min=0.0, max=1.0, precision=4, subtype='DISTANCE',
         description='s_r, m: Depth of the fixed root particles beneath the scalp (§3.2)')
     max_length: FloatProperty(
-        name='Max Length (L_max)', default=0.25, min=0.0001, max=10.0, precision=4,
+        name='Max Length (L_max)', default=0.25, min=0.0001, max=10.0, precision=4, subtype='DISTANCE',
         description='L_max, m: Hair length where the length map is 1 (§3.2)')
     root_tangent_weight: FloatProperty(
         name='Root Tangent Weight (w_t)', default=0.3, min=0.0, max=100.0, precision=4,
@@ -150,22 +150,22 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
         name='Whorl V (v_w)', default=0.5, min=0.0, max=1.0, precision=4,
         description='v_w: v of the hair whorl centre on the scalp (eq. 4)')
     beam_length: FloatProperty(
-        name='Beam Length (b)', default=0.03, min=0.001, max=100.0, precision=4,
+        name='Beam Length (b)', default=0.03, min=0.001, max=100.0, precision=4, subtype='DISTANCE',
         description='b, m: Bending length (EI/λg)^(1/3) of the cantilever-beam initial shape (Anjyo 1992)')
     seed: IntProperty(
         name='Seed', default=0, min=0, max=2147483647,
         description='Random seed of the Poisson-disc sampling')
     h1: FloatProperty(
-        name='H1 (h₁)', default=0.016, min=1e-05, max=1.0, precision=4,
+        name='Connection Radius (h₁)', default=0.016, min=1e-05, max=1.0, precision=4, subtype='DISTANCE',
         description='h₁, m: Smoothing length of the connections: pairs within 2h₁ at rest (eq. 7)')
     a0: FloatProperty(
-        name='A0 (a₀)', default=0.5, min=0.0, max=1.0, precision=4,
+        name='Alignment Threshold (a₀)', default=0.5, min=0.0, max=1.0, precision=4,
         description='a₀: Alignment threshold: pairs with a_ij < a₀ are dropped (eq. 6)')
     neighbor_num: IntProperty(
-        name='Neighbor Count (N_n)', default=12, min=1, max=1000,
+        name='Connections per Particle (N_n)', default=12, min=1, max=1000,
         description='N_n: Connections kept per particle, strongest c_ij W(l_ij, h₁) first (§3.2)')
     young_modulus: FloatProperty(
-        name='Young Modulus (E)', default=10000.0, min=0.0, max=1000000000000.0, precision=4,
+        name="Young's Modulus (E)", default=10000.0, min=0.0, max=1000000000000.0, precision=1,
         description="E, Pa: Tensile Young's modulus kept constant per particle (eq. 10-14)")
     material_density: FloatProperty(
         name='Material Density (δ)', default=1300.0, min=1.0, max=100000.0, precision=4,
@@ -177,13 +177,13 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
         name='Hair Density (ρ_h)', default=10.0, min=0.001, max=10000.0, precision=4,
         description='ρ_h, kg/m³: Mass of hair per volume of the hair region; sets the particle mass m_i')
     h2: FloatProperty(
-        name='H2 (h₂)', default=0.011, min=1e-05, max=1.0, precision=4,
+        name='Interaction Radius (h₂)', default=0.011, min=1e-05, max=1.0, precision=4, subtype='DISTANCE',
         description='h₂, m: Smoothing length of hair-hair interactions (eq. 1, 16-18)')
     attraction_repulsion: BoolProperty(
-        name='Attraction Repulsion', default=True,
+        name='Attraction and Repulsion', default=True,
         description='Apply attraction/repulsion (eq. 16)')
     pressure_stiffness: FloatProperty(
-        name='Pressure Stiffness (k_a)', default=0.05, min=0.0, max=10000.0, precision=4,
+        name='Attraction Strength (k_a)', default=0.05, min=0.0, max=10000.0, precision=4,
         description='k_a, m²/s²: Magnitude of the attraction/repulsion, P = k_a(ρ − ρ₀) (eq. 16)')
     rest_density: FloatProperty(
         name='Rest Density (ρ₀)', default=8.0, min=0.0, max=100000.0, precision=4,
@@ -210,10 +210,10 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
         name='Wind Speed', default=0.0, min=0.0, max=100.0, precision=4,
         description='m/s: Free-stream speed of the SPH wind (§3.5); 0 = none')
     wind_heading: FloatProperty(
-        name='Wind Heading', default=0.0, min=-7.0, max=7.0, precision=4,
+        name='Wind Heading', default=0.0, min=-7.0, max=7.0, precision=4, subtype='ANGLE',
         description='rad: Horizontal direction the wind blows to, from +X toward +Y')
     wind_particle_spacing: FloatProperty(
-        name='Wind Particle Spacing', default=0.03, min=0.001, max=1.0, precision=4,
+        name='Wind Particle Spacing', default=0.03, min=0.001, max=1.0, precision=4, subtype='DISTANCE',
         description='m: Spacing (and smoothing length) of the air particles')
     wind_drag: FloatProperty(
         name='Wind Drag (k_d)', default=20.0, min=0.0, max=100000.0, precision=4,
