@@ -126,11 +126,14 @@ def length_weights(groom, scalp_vertices_wo):
 class ParticleSkin:
     """LCP's motion on real strands (Bando 2003 §4): every strand point follows the particles
     nearest to it at rest, each carrying the point's rest offset from it (inverse-distance
-    weights over `neighbours_num` particles); roots follow the head rigidly."""
+    weights over `neighbours_num` particles); roots follow the head rigidly. Then, root to
+    tip, each point is put at its rest distance from the previous one toward where the
+    particles carried it, so strands never stretch while the volume deforms."""
 
     def __init__(self, groom, particles_rest_wo, head_matrix, neighbours_num=4, chunk=1024):
         self.rest = np.ascontiguousarray(groom.positions_wo, dtype=np.float32)
-        self.roots = groom.curve_offsets[:-1]
+        offsets = groom.curve_offsets
+        self.roots = offsets[:-1]
         points = self.rest.astype(np.float64)
         particles = particles_rest_wo.astype(np.float64)
         k = min(neighbours_num, len(particles))
@@ -147,13 +150,23 @@ class ParticleSkin:
         self.offset = points - (self.weights[:, :, None] * particles[self.neighbours]).sum(axis=1)
         inverse = np.linalg.inv(np.asarray(head_matrix, dtype=np.float64))
         self.roots_head = (self.rest[self.roots] @ inverse[:3, :3].T + inverse[:3, 3])
+        # Point k of every strand long enough to have one, and its rest segment length.
+        counts = np.diff(offsets)
+        self.layers = [self.roots[counts > k] + k for k in range(1, int(counts.max()))]
+        self.rest_lengths = np.zeros(len(points))
+        self.rest_lengths[1:] = np.linalg.norm(np.diff(points, axis=0), axis=1)
 
     def apply(self, particles_wo, head_matrix):
         """Strand positions (N, 3) float32 for the particles' current positions."""
         moved = (self.weights[:, :, None] * np.asarray(particles_wo)[self.neighbours]).sum(axis=1)
-        positions = (moved + self.offset).astype(np.float32)
+        targets = moved + self.offset
+        positions = np.empty_like(targets)
         positions[self.roots] = bridge.to_world(head_matrix, self.roots_head)
-        return positions
+        for layer in self.layers:  # root to tip, all strands at once
+            toward = targets[layer] - positions[layer - 1]
+            length = np.maximum(np.linalg.norm(toward, axis=1, keepdims=True), 1e-12)
+            positions[layer] = positions[layer - 1] + toward * (self.rest_lengths[layer, None] / length)
+        return positions.astype(np.float32)
 
 
 class Simulation:
