@@ -1,6 +1,7 @@
 #include "bindings/arrays.hh"
 
 #include <cmath>
+#include <vector>
 
 #include "groom/groom.hh"
 
@@ -11,10 +12,10 @@ namespace hairdyn::bindings {
   throw py::value_error(message);
 }
 
-/* A C-contiguous numpy array of `dtype` with shape (rows, columns), or (rows,) when columns
- * is 0. Any other object, dtype, shape or layout raises ValueError naming the argument. */
-py::array check_array(const py::handle obj, const char *name, const py::dtype &dtype,
-                      const char *dtype_name, const int64_t columns)
+/* A C-contiguous numpy array of `dtype` with shape (rows, *inner). Any other object, dtype,
+ * shape or layout raises ValueError naming the argument. */
+static py::array check_rows(const py::handle obj, const char *name, const py::dtype &dtype,
+                            const char *dtype_name, const std::vector<int64_t> &inner)
 {
   if (!py::isinstance<py::array>(obj)) {
     fail(std::string(name) + " must be a numpy array, not " +
@@ -25,22 +26,47 @@ py::array check_array(const py::handle obj, const char *name, const py::dtype &d
     fail(std::string(name) + " must have dtype " + dtype_name + ", not " +
          std::string(py::str(array.dtype())));
   }
-  const bool shape_ok = columns == 0 ? array.ndim() == 1 :
-                                       (array.ndim() == 2 && array.shape(1) == columns);
+  bool shape_ok = array.ndim() == py::ssize_t(inner.size() + 1);
+  for (size_t d = 0; shape_ok && d < inner.size(); d++) {
+    shape_ok = array.shape(py::ssize_t(d + 1)) == inner[d];
+  }
   if (!shape_ok) {
+    std::string expected = "(N";
+    for (const int64_t size : inner) {
+      expected += ", " + std::to_string(size);
+    }
+    expected += inner.empty() ? ",)" : ")";
     std::string shape = "(";
     for (py::ssize_t d = 0; d < array.ndim(); d++) {
       shape += (d ? ", " : "") + std::to_string(array.shape(d));
     }
     shape += array.ndim() == 1 ? ",)" : ")";
-    fail(std::string(name) + " must have shape " +
-         (columns == 0 ? std::string("(N,)") : "(N, " + std::to_string(columns) + ")") +
-         ", not " + shape);
+    fail(std::string(name) + " must have shape " + expected + ", not " + shape);
   }
   if (!(array.flags() & py::array::c_style)) {
     fail(std::string(name) + " must be C-contiguous (use numpy.ascontiguousarray)");
   }
   return array;
+}
+
+/* ValueError naming the first row of `rows_num` rows of `row_size` floats with a NaN or an
+ * infinity. */
+static void check_finite(const float *data, const int64_t rows_num, const int64_t row_size,
+                         const char *name, const char *row_word)
+{
+  for (int64_t i = 0; i < rows_num * row_size; i++) {
+    if (!std::isfinite(data[i])) {
+      fail(std::string(name) + " has a value that is not a finite number (NaN or infinity) at " +
+           row_word + " " + std::to_string(i / row_size));
+    }
+  }
+}
+
+py::array check_array(const py::handle obj, const char *name, const py::dtype &dtype,
+                      const char *dtype_name, const int64_t columns)
+{
+  return check_rows(obj, name, dtype, dtype_name,
+                    columns == 0 ? std::vector<int64_t>{} : std::vector<int64_t>{columns});
 }
 
 Span<vec3> as_float3_unchecked(const py::handle obj, const char *name)
@@ -53,24 +79,14 @@ Span<float> as_float(const py::handle obj, const char *name)
 {
   const py::array array = check_array(obj, name, py::dtype::of<float>(), "float32", 0);
   const Span<float> span(static_cast<const float *>(array.data()), array.shape(0));
-  for (int64_t i = 0; i < span.size(); i++) {
-    if (!std::isfinite(span[i])) {
-      fail(std::string(name) + " has a value that is not a finite number (NaN or infinity) at index " +
-           std::to_string(i));
-    }
-  }
+  check_finite(span.data(), span.size(), 1, name, "index");
   return span;
 }
 
 Span<vec3> as_float3(const py::handle obj, const char *name)
 {
   const Span<vec3> span = as_float3_unchecked(obj, name);
-  for (int64_t i = 0; i < span.size(); i++) {
-    if (!is_finite(span[i])) {
-      fail(std::string(name) + " has a value that is not a finite number (NaN or infinity) at row " +
-           std::to_string(i));
-    }
-  }
+  check_finite(reinterpret_cast<const float *>(span.data()), span.size(), 3, name, "row");
   return span;
 }
 
@@ -88,27 +104,9 @@ Span<int32_t> as_int(const py::handle obj, const char *name)
 
 Span<mat3> as_frames(const py::handle obj, const char *name)
 {
-  if (!py::isinstance<py::array>(obj)) {
-    fail(std::string(name) + " must be a numpy array, not " +
-         std::string(py::str(obj.get_type().attr("__name__"))));
-  }
-  const py::array array = py::reinterpret_borrow<py::array>(obj);
-  if (!array.dtype().is(py::dtype::of<float>())) {
-    fail(std::string(name) + " must have dtype float32, not " + std::string(py::str(array.dtype())));
-  }
-  if (array.ndim() != 3 || array.shape(1) != 3 || array.shape(2) != 3) {
-    fail(std::string(name) + " must have shape (N, 3, 3)");
-  }
-  if (!(array.flags() & py::array::c_style)) {
-    fail(std::string(name) + " must be C-contiguous (use numpy.ascontiguousarray)");
-  }
+  const py::array array = check_rows(obj, name, py::dtype::of<float>(), "float32", {3, 3});
   const Span<mat3> span(static_cast<const mat3 *>(array.data()), array.shape(0));
-  for (int64_t i = 0; i < span.size(); i++) {
-    if (!is_finite(span[i][0]) || !is_finite(span[i][1]) || !is_finite(span[i][2])) {
-      fail(std::string(name) + " has a value that is not a finite number (NaN or infinity) at frame " +
-           std::to_string(i));
-    }
-  }
+  check_finite(static_cast<const float *>(array.data()), span.size(), 9, name, "frame");
   return span;
 }
 
@@ -140,32 +138,43 @@ void check_groom(const Span<int32_t> curve_offsets, const Span<vec3> positions)
   }
 }
 
-/* A numpy (N, 3) float32 view of `span`; `owner` stays alive as long as the view does. */
-py::array float3_view(const Span<vec3> span, const py::handle owner)
+/* A read-only numpy view of `data` with the given shape and strides (bytes); `owner` stays
+ * alive as long as the view does. Every *_view below is one of these. */
+static py::array read_only_view(const py::dtype &dtype, std::vector<py::ssize_t> shape,
+                                std::vector<py::ssize_t> strides, const void *data,
+                                const py::handle owner)
 {
-  py::array view(py::dtype::of<float>(), {span.size(), int64_t(3)},
-                 {int64_t(sizeof(vec3)), int64_t(sizeof(float))},
-                 reinterpret_cast<const float *>(span.data()), owner);
+  py::array view(dtype, std::move(shape), std::move(strides), data, owner);
   view.attr("setflags")(py::arg("write") = false);
   return view;
+}
+
+py::array float3_view(const Span<vec3> span, const py::handle owner)
+{
+  return read_only_view(py::dtype::of<float>(), {span.size(), 3},
+                        {py::ssize_t(sizeof(vec3)), py::ssize_t(sizeof(float))}, span.data(),
+                        owner);
 }
 
 py::array frames_view(const Span<mat3> span, const py::handle owner)
 {
   static_assert(sizeof(mat3) == 9 * sizeof(float), "mat3 must be 9 packed floats");
-  py::array view(py::dtype::of<float>(), {span.size(), int64_t(3), int64_t(3)},
-                 {int64_t(sizeof(mat3)), int64_t(sizeof(vec3)), int64_t(sizeof(float))},
-                 reinterpret_cast<const float *>(span.data()), owner);
-  view.attr("setflags")(py::arg("write") = false);
-  return view;
+  return read_only_view(py::dtype::of<float>(), {span.size(), 3, 3},
+                        {py::ssize_t(sizeof(mat3)), py::ssize_t(sizeof(vec3)),
+                         py::ssize_t(sizeof(float))},
+                        span.data(), owner);
 }
 
 py::array int_view(const Span<int32_t> span, const py::handle owner)
 {
-  py::array view(py::dtype::of<int32_t>(), {span.size()}, {int64_t(sizeof(int32_t))},
-                 span.data(), owner);
-  view.attr("setflags")(py::arg("write") = false);
-  return view;
+  return read_only_view(py::dtype::of<int32_t>(), {span.size()}, {py::ssize_t(sizeof(int32_t))},
+                        span.data(), owner);
+}
+
+py::array float_view(const Span<float> span, const py::handle owner)
+{
+  return read_only_view(py::dtype::of<float>(), {span.size()}, {py::ssize_t(sizeof(float))},
+                        span.data(), owner);
 }
 
 }  // namespace hairdyn::bindings

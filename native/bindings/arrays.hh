@@ -45,6 +45,8 @@ py::array float3_view(Span<vec3> span, py::handle owner);
 py::array frames_view(Span<mat3> span, py::handle owner);
 /* A read-only numpy (N,) int32 view of `span`. */
 py::array int_view(Span<int32_t> span, py::handle owner);
+/* A read-only numpy (N,) float32 view of `span`. */
+py::array float_view(Span<float> span, py::handle owner);
 
 void bind_groom(py::module_ &m);
 void bind_collision(py::module_ &m);

@@ -73,13 +73,6 @@ py::dict particles_dict(LcpParticles &&particles)
   return result;
 }
 
-py::array float_view(const Span<float> span, const py::handle owner)
-{
-  py::array view(py::dtype::of<float>(), {span.size()}, {int64_t(sizeof(float))}, span.data(), owner);
-  view.attr("setflags")(py::arg("write") = false);
-  return view;
-}
-
 }  // namespace
 
 void bind_lcp(py::module_ &m)
