@@ -42,6 +42,7 @@ class MeshData:
     vertices: np.ndarray  # (V, 3) float32, object space
     normals: np.ndarray  # (V, 3) float32, object space
     triangles: np.ndarray  # (T, 3) int32
+    triangle_faces: np.ndarray  # (T,) int32, the polygon each triangle belongs to
     matrix_world: np.ndarray  # (4, 4) float64, row-major as Blender
 
     def vertices_wo(self):
@@ -204,25 +205,58 @@ def read_mesh(obj, depsgraph):
         mesh.calc_loop_triangles()
         triangles = np.empty((len(mesh.loop_triangles), 3), dtype=np.int32)
         mesh.loop_triangles.foreach_get("vertices", triangles.ravel())
+        triangle_faces = np.empty(len(mesh.loop_triangles), dtype=np.int32)
+        mesh.loop_triangles.foreach_get("polygon_index", triangle_faces)
     finally:
         evaluated.to_mesh_clear()
-    return MeshData(obj.name, vertices, normals, triangles,
+    return MeshData(obj.name, vertices, normals, triangles, triangle_faces,
                     matrix_array(evaluated.matrix_world))
 
 
-def vertex_group_members(obj, names, vertices_num):
-    """{group name: int32 vertex indices with weight > 0.5} for the named groups obj has.
+def vertex_group_weights(obj, names, vertices_num):
+    """{group name: (vertices_num,) float32 weight of each vertex, 0 outside the group} for the
+    named groups obj has.
 
     Blender has no bulk read of group weights, so this walks the vertices once; call it when
     a simulation is set up, never per frame."""
     indices = {group.index: group.name for group in obj.vertex_groups if group.name in names}
-    members = {name: [] for name in indices.values()}
+    weights = {name: np.zeros(vertices_num, dtype=np.float32) for name in indices.values()}
     for vertex in obj.data.vertices[:vertices_num]:
         for element in vertex.groups:
             name = indices.get(element.group)
-            if name is not None and element.weight > 0.5:
-                members[name].append(vertex.index)
-    return {name: np.array(found, dtype=np.int32) for name, found in members.items()}
+            if name is not None:
+                weights[name][vertex.index] = element.weight
+    return weights
+
+
+def vertex_group_members(obj, names, vertices_num):
+    """{group name: int32 vertex indices with weight > 0.5} for the named groups obj has."""
+    return {name: np.flatnonzero(weights > 0.5).astype(np.int32)
+            for name, weights in vertex_group_weights(obj, names, vertices_num).items()}
+
+
+def selected_faces(obj):
+    """(P,) bool: which polygons of a mesh object the artist selected (in Edit Mode, the
+    selection as it is now)."""
+    if obj.mode == 'EDIT':
+        obj.update_from_editmode()
+    polygons = obj.data.polygons
+    selected = np.zeros(len(polygons), dtype=bool)
+    polygons.foreach_get("select", selected)
+    return selected
+
+
+def image_grey(image):
+    """An image's grey values (H, W) float32, rows from the bottom as Blender stores them:
+    the mean of R, G and B, or the only channel. Empty (0, 0) when the image has no pixels."""
+    width, height = image.size
+    pixels = np.empty(len(image.pixels), dtype=np.float32)
+    if len(pixels) == 0 or width * height == 0:
+        return np.zeros((0, 0), dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    pixels = pixels.reshape(height, width, image.channels)
+    grey = pixels[:, :, :3].mean(axis=2) if image.channels >= 3 else pixels[:, :, 0]
+    return np.ascontiguousarray(grey, dtype=np.float32)
 
 
 def object_matrix(obj, depsgraph):
