@@ -15,7 +15,8 @@ BUNDLED = Path(__file__).resolve().parent / "presets"
 def _values():
     """Every solver setting a preset stores, as Python paths under `settings`."""
     top = ["settings.method", "settings.use_collision", "settings.use_default_colliders",
-           "settings.collider_parts", "settings.lcp_scalp"]
+           "settings.collider_parts", "settings.lcp_init", "settings.lcp_scalp_source",
+           "settings.lcp_scalp", "settings.lcp_length_source", "settings.lcp_length_group"]
     groups = [("strands", properties.HairdynStrandSettings),
               ("lcp", properties.HairdynLcpSettings),
               ("collision", properties.HairdynCollisionSettings)]

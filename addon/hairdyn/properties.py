@@ -298,10 +298,49 @@ class HairdynSettings(bpy.types.PropertyGroup):
         name="Billboards", default=True,
         description="Show LCP particles as hair-textured cards along the hair direction, "
                     "faded by 1/sin θ (Bando 2003 §4), in the viewport and in Cycles")
+    lcp_init: EnumProperty(
+        name="Particles From", default='SCALP',
+        items=(('SCALP', "Scalp",
+                "Poisson-disc samples of the hair volume over the scalp's (u, v) and the arc "
+                "length s up to the length map, in a cantilever-beam shape (Bando 2003 §3.2)"),
+               ('GROOM', "Groom",
+                "Samples along the groom's strands: u, v from the root's surface position, s "
+                "from arc length, directions from the tangents (Bando 2003 §3.2); needs no "
+                "scalp")),
+        description="Where LCP's particles start (Bando 2003 §3.2)")
+    lcp_scalp_source: EnumProperty(
+        name="Scalp From", default='GROUP',
+        items=(('GROUP', "Vertex Group",
+                "The head's faces whose corners all lie in a vertex group (Bando 2003 §3.2)"),
+               ('FACES', "Selected Faces",
+                "The head mesh's selected faces (Bando 2003 §3.2)")),
+        description="How the part of the head that grows hair is marked (Bando 2003 §3.2)")
     lcp_scalp: StringProperty(
         name="Scalp", default="scalp",
-        description="Vertex group of the head that LCP samples the hair volume over (Bando "
-                    "2003 §3.2); the hair's lengths come from the groom's strands")
+        description="Vertex group of the head that marks the scalp LCP samples the hair volume "
+                    "over (Bando 2003 §3.2)")
+    lcp_length_source: EnumProperty(
+        name="Lengths From", default='GROOM',
+        items=(('GROOM', "Groom",
+                "At each scalp point the length of the groom's nearest strand; the longest "
+                "strand is L_max (Bando 2003 §3.2)"),
+               ('IMAGE', "Image",
+                "A grey image over the scalp's (u, v), scaled by Max Length L_max (Bando 2003 "
+                "§3.2)"),
+               ('WEIGHTS', "Vertex Weights",
+                "A vertex group of the head, its weights scaled by Max Length L_max (Bando "
+                "2003 §3.2)")),
+        description="The length map L(u, v): how long the hair grows over the scalp (Bando "
+                    "2003 §3.2)")
+    lcp_length_image: PointerProperty(
+        name="Length Image", type=bpy.types.Image,
+        description="Grey image of the length map L(u, v) / L_max over the scalp's harmonic "
+                    "(u, v) (Bando 2003 §3.2): columns from u = 0, rows from v = 0 at the "
+                    "bottom; white grows hair of Max Length, black none")
+    lcp_length_group: StringProperty(
+        name="Length Group", default="length",
+        description="Vertex group of the head whose weights are the length map L / L_max "
+                    "(Bando 2003 §3.2): weight 1 grows hair of Max Length, 0 none")
     output_children: PointerProperty(
         name="Output Children", type=bpy.types.Object,
         description="Curves object that receives the child hairs every frame (created when "
@@ -351,7 +390,7 @@ class HairdynSettings(bpy.types.PropertyGroup):
 
 def settings_dict(settings):
     """The solver parameters of a settings group as plain values (for a cache manifest):
-    every property but object pointers and the cache's own settings."""
+    every property but object pointers and the cache's own settings; images by name."""
     skip = {"rna_type", "name", "enabled", "head", "collider_index", "output_children",
             "use_billboards", "output_curves", "output_points", "cache_directory",
             "use_cache", "use_live"}
@@ -363,6 +402,8 @@ def settings_dict(settings):
         if prop.type == 'POINTER':
             if isinstance(value, bpy.types.PropertyGroup):
                 result[prop.identifier] = settings_dict(value)
+            elif prop.fixed_type.identifier == 'Image':  # the length map: by name
+                result[prop.identifier] = value.name if value is not None else None
         elif prop.type == 'COLLECTION':
             result[prop.identifier] = [item.object.name for item in value if item.object]
         elif hasattr(value, "__len__") and not isinstance(value, str):

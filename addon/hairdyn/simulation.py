@@ -88,10 +88,22 @@ def scalp_points(groom, head_mesh, count, seed):
     return np.ascontiguousarray(points, dtype=np.float32)
 
 
-def scalp_patch(head, depsgraph, group_name):
-    """The scalp as a mesh of its own (Bando 2003 §3.2): world-space vertices and triangles of
-    the head's faces whose corners all lie in the vertex group."""
-    mesh = bridge.read_mesh(head, depsgraph)
+def scalp_triangles(head, mesh, settings):
+    """The head mesh's triangles the artist marked as scalp (Bando 2003 §3.2): those whose
+    corners all lie in the scalp vertex group, or those of the selected faces."""
+    if settings.lcp_scalp_source == 'FACES':
+        selected = bridge.selected_faces(head)
+        faces_num = int(mesh.triangle_faces.max()) + 1 if len(mesh.triangle_faces) else 0
+        if faces_num != len(selected):
+            raise HairdynError(f"The modifiers of '{head.name}' change its faces, so its face "
+                               "selection does not mark the scalp: use a vertex group")
+        triangles = mesh.triangles[selected[mesh.triangle_faces]]
+        if len(triangles) == 0:
+            raise HairdynError(f"No face of '{head.name}' is selected: select the scalp's faces "
+                               "in Edit Mode (LCP samples the hair volume over them), or mark "
+                               "the scalp with a vertex group")
+        return triangles
+    group_name = settings.lcp_scalp
     members = bridge.vertex_group_members(head, {group_name}, len(mesh.vertices)).get(group_name)
     if members is None or len(members) == 0:
         raise HairdynError(f"'{head.name}' has no vertex group '{group_name}' marking the scalp: "
@@ -101,11 +113,65 @@ def scalp_patch(head, depsgraph, group_name):
     triangles = mesh.triangles[inside[mesh.triangles].all(axis=1)]
     if len(triangles) == 0:
         raise HairdynError(f"The scalp group '{group_name}' of '{head.name}' covers no face")
+    return triangles
+
+
+def scalp_patch(head, depsgraph, settings):
+    """The scalp as a mesh of its own (Bando 2003 §3.2): world-space vertices and triangles of
+    the part of the head the artist marked, and each patch vertex's index in the head mesh."""
+    mesh = bridge.read_mesh(head, depsgraph)
+    triangles = scalp_triangles(head, mesh, settings)
     used = np.unique(triangles)
     remap = np.full(len(mesh.vertices), -1, dtype=np.int32)
     remap[used] = np.arange(len(used), dtype=np.int32)
     return (np.ascontiguousarray(mesh.vertices_wo()[used]),
-            np.ascontiguousarray(remap[triangles], dtype=np.int32))
+            np.ascontiguousarray(remap[triangles], dtype=np.int32), used)
+
+
+def length_map(settings, groom, head, scalp_vertices_wo, scalp_head_vertices):
+    """The length map L(u, v) of Bando 2003 §3.2 as the sampler takes it: (per scalp vertex
+    weights or None, a grey image (H, W) or None, L_max in m). From the groom (the longest
+    strand is L_max), or an image or the head's vertex weights scaled by Max Length."""
+    source = settings.lcp_length_source
+    if source == 'GROOM':
+        weights, longest = length_weights(groom, scalp_vertices_wo)
+        return weights, None, longest
+    if source == 'IMAGE':
+        return None, length_image(settings.lcp_length_image), settings.lcp.max_length
+    return (group_length_weights(head, settings.lcp_length_group, scalp_head_vertices), None,
+            settings.lcp.max_length)
+
+
+def length_image(image):
+    """The grey values of the length-map image, rows from v = 0; a HairdynError when it
+    would grow no hair."""
+    if image is None:
+        raise HairdynError("Empty length map: no Length Image is set (choose a grey image in "
+                           "the LCP panel; white grows hair of Max Length, black none)")
+    grey = bridge.image_grey(image)
+    if grey.size == 0:
+        raise HairdynError(f"Empty length map: the image '{image.name}' has no pixels (is its "
+                           "file missing?)")
+    if not (grey > 0.0).any():
+        raise HairdynError(f"Empty length map: the image '{image.name}' is black everywhere, "
+                           "so no hair would grow (white grows hair of Max Length)")
+    return grey
+
+
+def group_length_weights(head, group_name, scalp_head_vertices):
+    """Per scalp vertex, its weight in the head's vertex group `group_name`; a HairdynError
+    when the group is missing or zero over the whole scalp."""
+    weights = bridge.vertex_group_weights(head, {group_name},
+                                          int(scalp_head_vertices.max()) + 1).get(group_name)
+    if weights is None:
+        raise HairdynError(f"Empty length map: '{head.name}' has no vertex group '{group_name}' "
+                           "(set Length Group in the LCP panel to the group whose weights are "
+                           "the hair lengths)")
+    weights = weights[scalp_head_vertices]
+    if not (weights > 0.0).any():
+        raise HairdynError(f"Empty length map: the weights of the group '{group_name}' are zero "
+                           f"over the whole scalp of '{head.name}', so no hair would grow")
+    return np.ascontiguousarray(weights, dtype=np.float32)
 
 
 def length_weights(groom, scalp_vertices_wo):
@@ -218,13 +284,20 @@ class Simulation:
         self.collision_ms = 0.0
 
     def _make_lcp(self, depsgraph, head_matrix):
-        """Bando 2003 §3.2: particles sampled over the scalp group of the head, the hair's
-        length at each scalp point from the groom's nearest strand."""
-        params = properties.native_params(self.settings.lcp, self.native.LcpParams)
-        scalp_vertices, scalp_triangles = scalp_patch(self.head, depsgraph, self.settings.lcp_scalp)
-        weights, params.max_length = length_weights(self.groom, scalp_vertices)
-        particles = self.native.sample_lcp_particles(params, scalp_vertices, scalp_triangles,
-                                                     weights)
+        """Bando 2003 §3.2: particles sampled over the scalp of the head up to the length map,
+        or along the groom's strands."""
+        settings = self.settings
+        params = properties.native_params(settings.lcp, self.native.LcpParams)
+        if settings.lcp_init == 'GROOM':
+            particles = self.native.lcp_particles_from_groom(
+                params, self.groom.curve_offsets, self.groom.positions_wo, self.groom.root_uvs)
+        else:
+            scalp_vertices, scalp_triangles, scalp_head_vertices = scalp_patch(
+                self.head, depsgraph, settings)
+            weights, image, params.max_length = length_map(
+                settings, self.groom, self.head, scalp_vertices, scalp_head_vertices)
+            particles = self.native.sample_lcp_particles(params, scalp_vertices, scalp_triangles,
+                                                         weights, image)
         return self.native.LcpSolver(params, particles["positions"], particles["directions"],
                                      particles["u"], particles["v"], particles["s"], head_matrix)
 
