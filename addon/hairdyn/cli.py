@@ -8,8 +8,9 @@ With the bpy module: python addon/hairdyn/cli.py --blend scene.blend run --objec
 (--cache FOLDER, --resume to continue a bake that stopped).
 
 `--set name=value` sets any property of the object's hairdyn settings by name (enum values
-case-insensitive; vectors as x,y,z; colliders as a comma-separated list of objects); a name
-shared by two groups is qualified: strands.damping, collision.damping. Exit codes: 0 success, 1 the simulation failed (message on stderr, the
+case-insensitive; vectors as x,y,z; objects and images by name; colliders as a
+comma-separated list of objects); a name shared by two groups is qualified: strands.damping,
+collision.damping. Exit codes: 0 success, 1 the simulation failed (message on stderr, the
 report still written when possible), 2 bad command line (unknown object, parameter or value).
 """
 import argparse
@@ -85,10 +86,14 @@ def _parse_value(prop, text):
     if kind == 'POINTER':
         import bpy
 
-        obj = bpy.data.objects.get(text)
-        if obj is None:
-            raise UsageError(f"{prop.identifier}: there is no object named '{text}'")
-        return obj
+        kind_name = prop.fixed_type.identifier  # Object, Image
+        datablocks = {"Object": bpy.data.objects, "Image": bpy.data.images}.get(kind_name)
+        if datablocks is None:
+            raise UsageError(f"{prop.identifier} cannot be set from the command line")
+        found = datablocks.get(text)
+        if found is None:
+            raise UsageError(f"{prop.identifier}: there is no {kind_name.lower()} named '{text}'")
+        return found
     if kind == 'STRING':
         return text
     raise UsageError(f"{prop.identifier} cannot be set from the command line")
