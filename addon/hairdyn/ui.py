@@ -140,12 +140,7 @@ class HAIRDYN_PT_lcp(_SubPanel, bpy.types.Panel):
 
     def draw_settings(self, layout, settings):
         lcp = settings.lcp
-        obj = settings.id_data
-        head = settings.head or (obj.data.surface if obj.type == 'CURVES' else obj)
-        if head is not None and head.type == 'MESH':
-            layout.prop_search(settings, "lcp_scalp", head, "vertex_groups", text="Scalp")
-        else:
-            layout.prop(settings, "lcp_scalp")
+        self.draw_initialisation(layout, settings)
         column = layout.column(align=True)
         column.prop(lcp, "particle_spacing")
         column.prop(lcp, "particle_num")
@@ -155,6 +150,32 @@ class HAIRDYN_PT_lcp(_SubPanel, bpy.types.Panel):
         for name in ("h1", "a0", "neighbor_num", "young_modulus", "material_density",
                      "spring_damping", "hair_density"):
             layout.prop(lcp, name)
+
+    @staticmethod
+    def draw_initialisation(layout, settings):
+        """Where the particles start (Bando 2003 §3.2): only the rows the choices use."""
+        layout.prop(settings, "lcp_init")
+        if settings.lcp_init == 'GROOM':
+            return
+        obj = settings.id_data
+        head = settings.head or (obj.data.surface if obj.type == 'CURVES' else obj)
+        if head is not None and head.type != 'MESH':
+            head = None
+
+        def vertex_group(name):
+            if head is None:
+                layout.prop(settings, name)
+            else:
+                layout.prop_search(settings, name, head, "vertex_groups")
+
+        layout.prop(settings, "lcp_scalp_source")
+        if settings.lcp_scalp_source == 'GROUP':
+            vertex_group("lcp_scalp")
+        layout.prop(settings, "lcp_length_source")
+        if settings.lcp_length_source == 'IMAGE':
+            layout.prop(settings, "lcp_length_image")
+        elif settings.lcp_length_source == 'WEIGHTS':
+            vertex_group("lcp_length_group")
 
 
 class HAIRDYN_PT_lcp_interactions(_SubPanel, bpy.types.Panel):
