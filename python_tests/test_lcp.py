@@ -1,10 +1,12 @@
 """LCP (Bando 2003) in Blender: particles over the scalp, strands carried by them, the report's
-particle figures, the particle output's attributes, bad input."""
+particle figures, the particle output's attributes, bad input; the initialisation options of
+§3.2 (scalp from a vertex group or selected faces, length map from the groom, an image or
+vertex weights, particles along an existing groom)."""
 import bpy
 import numpy as np
 import pytest
 
-from hairdyn import bridge, cli, simulation
+from hairdyn import bridge, cli, native, simulation
 from hairdyn.errors import HairdynError
 
 
@@ -74,6 +76,8 @@ def test_lcp_bad_values_are_refused(open_fixture):
     hair = lcp_hair(open_fixture, "head_curves.blend")
     with pytest.raises(cli.UsageError, match="h2 must be between"):
         cli.apply_settings(hair.hairdyn, ["h2=0"])
+    with pytest.raises(cli.UsageError, match="there is no image named 'Nope'"):
+        cli.apply_settings(hair.hairdyn, ["lcp_length_image=Nope"])
     hair.hairdyn.lcp.particle_spacing = 0.9  # larger than the head: no particle fits
     with pytest.raises(HairdynError, match="No particles"):
         simulation.run(bpy.context, hair, 1, 2)
@@ -126,3 +130,157 @@ def test_billboards_follow_the_hair_direction(open_fixture):
         assert abs(np.dot(along, direction[index])) > 0.999
         to_camera = camera - matrix[:3, 3]
         assert abs(np.dot(across, to_camera / np.linalg.norm(to_camera))) < 1e-3
+
+
+# Initialisation options of Bando 2003 §3.2: where the scalp is, the length map, the groom.
+
+
+def rest_particles(hair):
+    """The particles LCP starts from (the solver built at the rest frame), by attribute."""
+    built = simulation.Simulation(hair, depsgraph(), bpy.context.scene)
+    return {name: np.array(values) for name, values in built.particle_arrays().items()}
+
+
+def body_local(points):
+    """World points in the Body's object space (the head's centre is at (0, 0, 0.2))."""
+    inverse = np.linalg.inv(bridge.object_matrix(bpy.data.objects["Body"], depsgraph()))
+    return points @ inverse[:3, :3].T + inverse[:3, 3]
+
+
+def grey_image(name, left, right, size=(16, 4)):
+    """An image whose left half (u < 0.5) is grey `left` and right half `right`."""
+    width, height = size
+    image = bpy.data.images.new(name, width, height)
+    pixels = np.ones((height, width, 4), np.float32)
+    pixels[:, :, :3] = np.where(np.arange(width) < width // 2, left, right)[None, :, None]
+    image.pixels.foreach_set(pixels.ravel())
+    return image
+
+
+def weight_group(name, left, right):
+    """A vertex group of the Body weighting its -X half `left` and its +X half `right`."""
+    body = bpy.data.objects["Body"]
+    vertices = np.empty((len(body.data.vertices), 3), np.float32)
+    body.data.vertices.foreach_get("co", vertices.ravel())
+    x = vertices[:, 0]
+    group = body.vertex_groups.new(name=name)
+    group.add([int(i) for i in np.flatnonzero(x < 0.0)], left, 'REPLACE')
+    group.add([int(i) for i in np.flatnonzero(x >= 0.0)], right, 'REPLACE')
+
+
+def select_faces(where):
+    """Select the Body's faces whose centre (object space) satisfies where(centres)."""
+    polygons = bpy.data.objects["Body"].data.polygons
+    centres = np.empty((len(polygons), 3), np.float32)
+    polygons.foreach_get("center", centres.ravel())
+    polygons.foreach_set("select", where(centres))
+
+
+def test_lcp_scalp_from_selected_faces(open_fixture):
+    """Only the selected faces grow hair: the top of the head on its +X side."""
+    hair = lcp_hair(open_fixture, "head_curves.blend")
+    select_faces(lambda c: (c[:, 0] > 0.01) & (c[:, 2] > 0.2))
+    cli.apply_settings(hair.hairdyn, ["lcp_scalp_source=faces", "lcp_scalp=no_such_group"])
+    particles = rest_particles(hair)
+    roots = body_local(particles["position"][particles["s"] < 0.0])
+    assert len(roots) > 20
+    assert roots[:, 0].min() > -0.005 and roots[:, 0].max() > 0.05  # the +X side, spread over it
+    assert roots[:, 2].min() > 0.2 - 0.015
+
+
+def test_lcp_length_map_from_an_image(open_fixture):
+    """L(u, v) from a grey image times L_max: hair on the image's bright half is longer."""
+    hair = lcp_hair(open_fixture, "head_curves.blend")
+    grey_image("Lengths", 0.25, 1.0)
+    cli.apply_settings(hair.hairdyn, ["lcp_length_source=image", "lcp_length_image=Lengths",
+                                      "max_length=0.2"])
+    assert hair.hairdyn.lcp_length_image.name == "Lengths"
+    particles = rest_particles(hair)
+    u, s = particles["u"], particles["s"]
+    assert s[u < 0.4].max() < 0.25 * 0.2 + 0.002
+    assert s[u > 0.6].max() > 0.15
+
+
+def test_lcp_length_map_from_vertex_weights(open_fixture):
+    """L(u, v) from the head's vertex weights times L_max: the heavy side's hair is longer."""
+    hair = lcp_hair(open_fixture, "head_curves.blend")
+    weight_group("length", 0.25, 1.0)
+    cli.apply_settings(hair.hairdyn, ["lcp_length_source=weights", "lcp_length_group=length",
+                                      "max_length=0.2"])
+    particles = rest_particles(hair)
+    # Where each particle grows from: the scalp vertex nearest to its (u, v) on the scalp map.
+    vertices, triangles, _ = simulation.scalp_patch(bpy.data.objects["Body"], depsgraph(),
+                                                    hair.hairdyn)
+    scalp_uv = native.load().harmonic_scalp_map(vertices, triangles)
+    uv = np.stack([particles["u"], particles["v"]], axis=1)
+    nearest = ((uv[:, None, :] - scalp_uv[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
+    x, s = body_local(vertices)[nearest, 0], particles["s"]
+    assert s[x < -0.04].max() < 0.25 * 0.2 + 0.002
+    assert s[x > 0.04].max() > 0.15
+
+
+def missing_file_image():
+    image = bpy.data.images.new("Missing", 4, 4)
+    image.source = 'FILE'
+    image.filepath = "//no_such_length_map.png"
+
+
+@pytest.mark.parametrize("prepare, assignments, message", [
+    (None, ["lcp_length_source=image"], "Empty length map: no Length Image is set"),
+    (lambda: grey_image("Black", 0.0, 0.0), ["lcp_length_source=image", "lcp_length_image=Black"],
+     "Empty length map: the image 'Black' is black everywhere"),
+    (missing_file_image, ["lcp_length_source=image", "lcp_length_image=Missing"],
+     "Empty length map: the image 'Missing' has no pixels"),
+    (lambda: weight_group("length", 0.0, 0.0), ["lcp_length_source=weights"],
+     "Empty length map: the weights of the group 'length' are zero over the whole scalp"),
+    (None, ["lcp_length_source=weights", "lcp_length_group=nope"],
+     "Empty length map: 'Body' has no vertex group 'nope'"),
+    (lambda: select_faces(lambda c: np.zeros(len(c), bool)), ["lcp_scalp_source=faces"],
+     "No face of 'Body' is selected: select the scalp's faces"),
+], ids=["no image", "black image", "image without pixels", "zero weights", "missing group",
+        "no face selected"])
+def test_lcp_bad_initialisation_is_explained(open_fixture, prepare, assignments, message):
+    hair = lcp_hair(open_fixture, "head_curves.blend")
+    if prepare is not None:
+        prepare()
+    cli.apply_settings(hair.hairdyn, assignments)
+    with pytest.raises(HairdynError, match=message):
+        simulation.run(bpy.context, hair, 1, 1)
+
+
+def distances_to_segments(points, starts, ends, chunk=256):
+    """Distance from each point to its nearest segment starts[k]-ends[k]."""
+    result = np.empty(len(points))
+    along = ends - starts
+    lengths2 = np.maximum((along ** 2).sum(axis=1), 1e-30)
+    for first in range(0, len(points), chunk):
+        block = points[first:first + chunk, None, :]
+        t = np.clip(((block - starts) * along).sum(axis=2) / lengths2, 0.0, 1.0)
+        nearest = starts + t[:, :, None] * along
+        result[first:first + chunk] = np.sqrt(((block - nearest) ** 2).sum(axis=2).min(axis=1))
+    return result
+
+
+def test_lcp_particles_from_the_groom(open_fixture):
+    """Particles along the artist's strands, (u, v) the roots' surface UVs: no scalp needed."""
+    hair = lcp_hair(open_fixture, "head_curves.blend")
+    body = bpy.data.objects["Body"]
+    body.vertex_groups.remove(body.vertex_groups["scalp"])
+    cli.apply_settings(hair.hairdyn, ["lcp_init=groom"])
+    runner = simulation.Runner(bpy.context, hair, 1, 2)
+    solver, groom = runner.simulation.solver, runner.simulation.groom
+    positions, s = np.array(solver.positions), np.array(solver.s)
+    uv = np.stack([solver.u, solver.v], axis=1)
+    points, offsets = groom.positions_wo.astype(np.float64), groom.curve_offsets
+    last = np.ones(len(points) - 1, bool)
+    last[offsets[1:-1] - 1] = False  # no segment from one strand's tip to the next root
+    strands = s >= 0.0
+    assert strands.sum() > 100
+    assert distances_to_segments(positions[strands], points[:-1][last], points[1:][last]).max() < 1e-4
+    from_roots = np.abs(uv[:, None, :] - groom.root_uvs[None, :, :]).sum(axis=2).min(axis=1)
+    assert from_roots.max() < 1e-6
+    while not runner.done:
+        runner.advance()
+    report = runner.report()
+    assert report["nan_frames"] == 0 and report["particles"] == len(positions)
+    assert np.isfinite(runner.simulation.positions).all()
