@@ -107,7 +107,8 @@ def scalp_triangles(head, mesh, settings):
     members = bridge.vertex_group_members(head, {group_name}, len(mesh.vertices)).get(group_name)
     if members is None or len(members) == 0:
         raise HairdynError(f"'{head.name}' has no vertex group '{group_name}' marking the scalp: "
-                           "LCP samples the hair volume over it (set Scalp in the LCP panel)")
+                           "LCP samples the hair volume over it (set Scalp in the LCP panel, or "
+                           "take the scalp from the selected faces)")
     inside = np.zeros(len(mesh.vertices), dtype=bool)
     inside[members] = True
     triangles = mesh.triangles[inside[mesh.triangles].all(axis=1)]
