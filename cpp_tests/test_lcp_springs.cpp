@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 
+#include "lcp/implicit_springs.hh"
 #include "lcp/springs_bando2003.hh"
 
 using namespace hairdyn;
@@ -168,5 +169,113 @@ TEST(LcpSprings, DirectionsFollowTheConnections)
   }
   for (int64_t i = 0; i < n; i++) {
     EXPECT_GT(glm::dot(directions[size_t(i)], expected), 0.995f) << i;
+  }
+}
+
+namespace {
+
+/* A hanging chain: particle 0 fixed at the origin, `n` more below it at spacing a, directions
+ * −Z, connected to their next neighbours only (2h₁ = 1.5 a). */
+struct Chain {
+  std::vector<vec3> positions, directions, velocities;
+  std::vector<uint8_t> is_fixed;
+  std::vector<float> masses;
+  LcpConnections connections;
+};
+
+Chain hanging_chain(const int n, const float a, const float mass)
+{
+  Chain chain;
+  for (int i = 0; i <= n; i++) {
+    chain.positions.push_back(vec3(0.0f, 0.0f, -a * float(i)));
+    chain.directions.push_back(vec3(0.0f, 0.0f, -1.0f));
+    chain.velocities.push_back(vec3(0.0f));
+    chain.is_fixed.push_back(i == 0 ? 1 : 0);
+    chain.masses.push_back(mass);
+  }
+  chain.connections = build_connections(chain.positions, chain.directions, chain.is_fixed,
+                                        0.75f * a, 0.5f, 12);
+  return chain;
+}
+
+}  // namespace
+
+/* Backward Euler (lcp/implicit_springs.hh) at a time step 50 times past the explicit limit:
+ * the chain settles where each spring carries the weight below it, as the statics say. */
+TEST(LcpImplicitSprings, HangingChainReachesItsStaticStretchAtAHugeTimeStep)
+{
+  const int n = 10;
+  const float a = 0.01f, mass = 1e-4f, kappa = 10.0f, g = 9.81f;
+  Chain chain = hanging_chain(n, a, mass);
+  ASSERT_EQ(chain.connections.size(), n);
+  const std::vector<float> alpha_k(size_t(n), kappa);
+  /* Explicit limit: ω² ≤ 4κ/m, dt < 2/ω. */
+  const float dt = 50.0f * 2.0f / std::sqrt(4.0f * kappa / mass);
+  ImplicitSprings springs;
+  springs.tolerance = 1e-6f;
+  for (int step = 0; step < 400; step++) {
+    for (int i = 1; i <= n; i++) {
+      chain.velocities[size_t(i)].z -= dt * g; /* gravity, explicit */
+    }
+    const ImplicitSprings::Result result = springs.step(
+        chain.connections, chain.positions, alpha_k, 0.005f, chain.masses, chain.is_fixed, dt,
+        chain.velocities);
+    ASSERT_LE(result.iterations, 100);
+    for (int i = 0; i <= n; i++) {
+      chain.positions[size_t(i)] += dt * chain.velocities[size_t(i)];
+    }
+  }
+  EXPECT_EQ(chain.velocities[0], vec3(0.0f)) << "the fixed particle moved";
+  for (int i = 1; i <= n; i++) {
+    const float length = glm::length(chain.positions[size_t(i)] - chain.positions[size_t(i - 1)]);
+    /* Spring i carries the n − i + 1 particles below it. */
+    const float expected = a + float(n - i + 1) * mass * g / kappa;
+    EXPECT_NEAR(length, expected, 1e-3f * a) << "spring " << i;
+    EXPECT_NEAR(chain.positions[size_t(i)].x, 0.0f, 1e-6f);
+  }
+}
+
+/* Without gravity a stretched chain only loses energy, step after step, however large the
+ * time step: backward Euler dissipates, it never adds. */
+TEST(LcpImplicitSprings, EnergyNeverGrows)
+{
+  const int n = 8;
+  const float a = 0.01f, mass = 1e-4f, kappa = 10.0f;
+  Chain chain = hanging_chain(n, a, mass);
+  const std::vector<float> alpha_k(size_t(chain.connections.size()), kappa);
+  for (int i = 1; i <= n; i++) {
+    chain.positions[size_t(i)] *= 1.3f; /* stretched by 30 % */
+    chain.positions[size_t(i)].x += 0.002f * float(i % 2); /* and bent */
+  }
+  const auto energy = [&]() {
+    double e = 0.0;
+    for (int64_t p = 0; p < chain.connections.size(); p++) {
+      const float r = glm::length(chain.positions[size_t(chain.connections.tip[size_t(p)])] -
+                                  chain.positions[size_t(chain.connections.root[size_t(p)])]);
+      const float stretch = r - chain.connections.rest_length[size_t(p)];
+      e += 0.5 * double(kappa) * double(stretch) * double(stretch);
+    }
+    for (int i = 0; i <= n; i++) {
+      e += 0.5 * double(mass) * double(glm::dot(chain.velocities[size_t(i)], chain.velocities[size_t(i)]));
+    }
+    return e;
+  };
+  ImplicitSprings springs;
+  for (const float dt : {1e-4f, 1e-2f}) {
+    double previous = energy();
+    const double start = previous;
+    for (int step = 0; step < 50; step++) {
+      springs.step(chain.connections, chain.positions, alpha_k, 0.0f, chain.masses,
+                   chain.is_fixed, dt, chain.velocities);
+      for (int i = 0; i <= n; i++) {
+        chain.positions[size_t(i)] += dt * chain.velocities[size_t(i)];
+      }
+      const double now = energy();
+      EXPECT_LE(now, previous * (1.0 + 1e-4)) << "dt " << dt << ", step " << step;
+      previous = now;
+    }
+    if (dt > 1e-3f) {
+      EXPECT_LT(previous, 0.5 * start) << "a large step damps the stiff modes";
+    }
   }
 }

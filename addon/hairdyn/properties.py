@@ -173,6 +173,10 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
     spring_damping: FloatProperty(
         name='Spring Damping (γ)', default=0.005, min=0.0, max=10.0, precision=4,
         description='γ, s: Damping of the springs: force γ·α_ij k_ij·(v_ij·x̂_ij) (§3.3)')
+    implicit_springs: BoolProperty(
+        name='Implicit Springs', default=True,
+        description='Integrate the springs implicitly (backward Euler): few substeps at any '
+                    'stiffness. Off: explicit springs, substeps added as their stiffness needs')
     hair_density: FloatProperty(
         name='Hair Density (ρ_h)', default=10.0, min=0.001, max=10000.0, precision=4,
         description='ρ_h, kg/m³: Mass of hair per volume of the hair region; sets the particle mass m_i')
@@ -183,7 +187,7 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
         name='Attraction and Repulsion', default=True,
         description='Apply attraction/repulsion (eq. 16)')
     pressure_stiffness: FloatProperty(
-        name='Attraction Strength (k_a)', default=0.05, min=0.0, max=10000.0, precision=4,
+        name='Attraction Strength (k_a)', default=0.2, min=0.0, max=10000.0, precision=4,
         description='k_a, m²/s²: Magnitude of the attraction/repulsion, P = k_a(ρ − ρ₀) (eq. 16)')
     rest_density: FloatProperty(
         name='Rest Density (ρ₀)', default=8.0, min=0.0, max=100000.0, precision=4,
@@ -225,8 +229,9 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
         name='Body Friction (μ)', default=0.3, min=0.0, max=10.0, precision=4,
         description='μ: Coulomb friction coefficient of hair sliding on the body (§3.5)')
     substeps: IntProperty(
-        name='Substeps', default=8, min=1, max=1000,
-        description='Time steps per frame')
+        name='Substeps', default=1, min=1, max=1000,
+        description='Fewest time steps per frame; more are taken as the hair-hair pressure '
+                    '(eq. 16) or explicit springs need')
 
 
 class HairdynCollisionSettings(bpy.types.PropertyGroup):

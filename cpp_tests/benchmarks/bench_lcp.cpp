@@ -1,6 +1,8 @@
 /* LCP (Bando 2003) throughput: simulated frames per second (1/24 s frames) for 2,000 and
  * 20,000 particles of back hair under gravity with a swaying head, on 1 and 2 threads.
- * The counter "substeps" is the substeps per frame the springs needed. */
+ * Arguments: target particle count, threads, implicit springs (1) or explicit (0). The
+ * counter "substeps" is the substeps per frame, "cg_per_substep" the conjugate-gradient
+ * iterations of the implicit springs per substep. */
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -22,6 +24,7 @@ static void BM_LcpFrame(benchmark::State &state)
   params.particle_num = int32_t(target);
   params.max_length = 0.2f;
   params.root_depth = 0.02f;
+  params.implicit_springs = state.range(2) != 0;
   const LcpParticles particles = sample(down_facing_rectangle(0.2f, 0.1f, 20, 10), params);
   LcpSolver solver(params, particles, mat4(1.0f));
   /* Settle so the measured frames are the steady state. */
@@ -29,24 +32,28 @@ static void BM_LcpFrame(benchmark::State &state)
     solver.step(1.0f / 24.0f, mat4(1.0f));
   }
   int frame = 0;
-  double substeps = 0.0;
+  double substeps = 0.0, iterations = 0.0;
   for (auto _ : state) {
     const float angle = 0.3f * std::sin(float(frame++) * 0.2f);
     solver.step(1.0f / 24.0f, glm::rotate(mat4(1.0f), angle, vec3(0.0f, 0.0f, 1.0f)));
     substeps += solver.substeps_used();
+    iterations += solver.spring_iterations();
     benchmark::DoNotOptimize(solver.positions().data());
   }
   state.counters["particles"] = double(solver.particles_num());
   state.counters["pairs"] = double(solver.pairs_num());
   state.counters["substeps"] = substeps / double(state.iterations());
+  state.counters["cg_per_substep"] = substeps > 0.0 ? iterations / substeps : 0.0;
   state.counters["frames_per_s"] = benchmark::Counter(double(state.iterations()),
                                                       benchmark::Counter::kIsRate);
   set_thread_num(0);
 }
 BENCHMARK(BM_LcpFrame)
-    ->Args({2000, 1})
-    ->Args({2000, 2})
-    ->Args({20000, 2})
+    ->Args({2000, 1, 1})
+    ->Args({2000, 2, 1})
+    ->Args({20000, 2, 1})
+    ->Args({2000, 2, 0})
+    ->Args({20000, 2, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(2.0);

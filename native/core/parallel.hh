@@ -3,6 +3,7 @@
  * the thread count or on scheduling: bakes are byte-identical run to run. */
 #include <algorithm>
 #include <cstdint>
+#include <vector>
 
 #include "core/span.hh"
 
@@ -25,6 +26,31 @@ template<typename Fn> void parallel_for(int64_t size, int64_t grain, const Fn &f
     const int64_t start = chunk * grain;
     fn(IndexRange{start, std::min(grain, size - start)});
   }
+}
+
+/* Σ fn(range) over the same static chunks as parallel_for, added in chunk order in double
+ * precision: the sum does not depend on the thread count either. */
+template<typename Fn> double parallel_sum(int64_t size, int64_t grain, const Fn &fn)
+{
+  if (size <= 0) {
+    return 0.0;
+  }
+  grain = std::max<int64_t>(grain, 1);
+  const int64_t chunks = (size + grain - 1) / grain;
+  if (chunks == 1) {
+    return fn(IndexRange{0, size});
+  }
+  std::vector<double> partial(size_t(chunks), 0.0);
+#pragma omp parallel for schedule(static)
+  for (int64_t chunk = 0; chunk < chunks; chunk++) {
+    const int64_t start = chunk * grain;
+    partial[size_t(chunk)] = fn(IndexRange{start, std::min(grain, size - start)});
+  }
+  double sum = 0.0;
+  for (const double value : partial) {
+    sum += value;
+  }
+  return sum;
 }
 
 /* Number of threads parallel_for uses; 0 restores the default (all cores). */

@@ -30,12 +30,18 @@ struct LcpParams {
   float young_modulus = 1.0e4f; /* Pa, E: tensile modulus kept constant (eq. 10-11). */
   float material_density = 1300.0f; /* kg/m³, δ: density of the hair material (eq. 9). */
   float spring_damping = 0.005f; /* s, γ: spring damping, force γ·αk·(v_ij·x̂_ij). */
+  /* Backward Euler for the springs (lcp/implicit_springs.hh): stable at any time step. Off:
+   * explicit springs, with as many substeps as their stiffness needs. */
+  bool implicit_springs = true;
   float hair_density = 10.0f; /* kg/m³, ρ_h: mass of hair per volume of hair; sets m_i. */
 
   /* ---- hair-hair interactions (§3.4) ---- */
   float h2 = 0.011f;              /* m, h₂: smoothing length of the interactions. */
   bool attraction_repulsion = true; /* Apply eq. 16. */
-  float pressure_stiffness = 0.05f; /* m²/s², k_a: P = k_a (ρ − ρ₀) of eq. 16. */
+  /* m²/s², k_a: P = k_a (ρ − ρ₀) of eq. 16; c = √k_a is the hair's sound speed. 0.2 keeps
+   * two locks from passing into each other when they meet (Fig. 6 test); it also sets the
+   * substeps through the CFL bound. */
+  float pressure_stiffness = 0.2f;
   float rest_density = 8.0f;      /* kg/m³, ρ₀: small = repulsive, large = cohesive. */
   bool hair_collision = true;     /* Apply eq. 17. */
   float collision_damping = 60.0f; /* 1/s, d_c: damping of approaching hair (eq. 17). */
@@ -51,7 +57,9 @@ struct LcpParams {
   float wind_drag = 20.0f;    /* 1/s, k_d: hair-air drag rate, both ways. */
   float air_density = 1.2f;   /* kg/m³: density of the air particles. */
   float body_friction = 0.3f; /* μ: Coulomb friction of hair on the body. */
-  int32_t substeps = 8;       /* Time steps per frame. */
+  /* Fewest time steps per frame: more are taken when the explicit pressure of eq. 16 (CFL)
+   * or explicit springs need them. */
+  int32_t substeps = 1;
 
   template<typename Fn> static void for_each_field(Fn &&fn)
   {
@@ -99,6 +107,10 @@ struct LcpParams {
     fn(&LcpParams::spring_damping,
        ParamInfo{"spring_damping", "γ", "s", 0.0, 10.0,
                  "Damping of the springs: force γ·α_ij k_ij·(v_ij·x̂_ij) (§3.3)"});
+    fn(&LcpParams::implicit_springs,
+       ParamInfo{"implicit_springs", "", "", 0, 1,
+                 "Integrate the springs implicitly (backward Euler): few substeps at any "
+                 "stiffness. Off: explicit springs, substeps added as their stiffness needs"});
     fn(&LcpParams::hair_density,
        ParamInfo{"hair_density", "ρ_h", "kg/m³", 1e-3, 1e4,
                  "Mass of hair per volume of the hair region; sets the particle mass m_i"});
@@ -143,7 +155,10 @@ struct LcpParams {
     fn(&LcpParams::body_friction,
        ParamInfo{"body_friction", "μ", "", 0.0, 10.0,
                  "Coulomb friction coefficient of hair sliding on the body (§3.5)"});
-    fn(&LcpParams::substeps, ParamInfo{"substeps", "", "", 1, 1000, "Time steps per frame"});
+    fn(&LcpParams::substeps,
+       ParamInfo{"substeps", "", "", 1, 1000,
+                 "Fewest time steps per frame; more are taken as the hair-hair pressure (eq. 16) "
+                 "or explicit springs need"});
   }
 };
 

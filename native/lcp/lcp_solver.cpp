@@ -170,20 +170,30 @@ void LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
     wrap_air_particles(wind_box_, wind_wo, air_x_wo_, air_v_wo_);
   }
 
-  /* Springs are explicit: each substep is at most frame_dt / substeps and at most 1.8 / ω,
-   * ω² = 2 max_i Σ_j α_ij k_ij / m (Gershgorin bound; symplectic Euler is stable below
-   * 2 / ω). α grows as connections weaken, so ω is re-evaluated every substep. */
-  const float dt_max = frame_dt / float(std::max(1, params_.substeps));
+  /* The frame is cut into at least `substeps` equal substeps, short enough for the explicit
+   * pressure's CFL bound 0.6 h₂ / c, with the sound speed c = √(dP/dρ) = √k_a of eq. 16
+   * (the Fig. 6 scene went unstable near 1.4 h₂ / c). Explicit springs also keep each substep below 1.8 / ω, ω² = 2 max_i Σ_j α_ij k_ij / m
+   * (Gershgorin bound; symplectic Euler is stable below 2 / ω); α grows as connections
+   * weaken, so ω is re-evaluated every substep. */
+  int substeps = std::max(1, params_.substeps);
+  if (params_.attraction_repulsion && params_.pressure_stiffness > 0.0f) {
+    const float dt_cfl = 0.6f * params_.h2 / std::sqrt(params_.pressure_stiffness);
+    substeps = std::max(substeps, int(std::ceil(frame_dt / dt_cfl)));
+  }
+  const float dt_max = frame_dt / float(substeps);
   float elapsed = 0.0f;
   substeps_used_ = 0;
+  spring_iterations_ = 0;
   while (elapsed < frame_dt * (1.0f - 1e-5f) && substeps_used_ < 100000) {
     compute_spring_coefficients(connections_, x_head_, cross_sections_, params_.h1,
                                 params_.young_modulus, k_, alpha_k_, side_sums_);
-    const float omega = std::sqrt(
-        2.0f * max_particle_stiffness(connections_, alpha_k_, is_root_) / mass_);
     float dt = std::min(dt_max, frame_dt - elapsed);
-    if (std::isfinite(omega) && omega > 0.0f) {
-      dt = std::min(dt, 1.8f / omega);
+    if (!params_.implicit_springs) {
+      const float omega = std::sqrt(
+          2.0f * max_particle_stiffness(connections_, alpha_k_, is_root_) / mass_);
+      if (std::isfinite(omega) && omega > 0.0f) {
+        dt = std::min(dt, 1.8f / omega);
+      }
     }
     substep(dt, head_at((elapsed + 0.5f * dt) / frame_dt), head_at((elapsed + dt) / frame_dt));
     elapsed += dt;
@@ -210,9 +220,11 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   std::fill(damped_forces_.begin(), damped_forces_.end(), vec3(0.0f));
   std::fill(damping_.begin(), damping_.end(), 0.0f);
   /* Springs: k_ij (eq. 7) and α_ij (eq. 13-14) were computed by step() for this state;
-   * damped springs α_ij k_ij. */
-  accumulate_spring_forces(connections_, x_head_, v_head_, alpha_k_, params_.spring_damping,
-                           forces_, damped_forces_, damping_);
+   * damped springs α_ij k_ij, here when explicit, after the other forces when implicit. */
+  if (!params_.implicit_springs) {
+    accumulate_spring_forces(connections_, x_head_, v_head_, alpha_k_, params_.spring_damping,
+                             forces_, damped_forces_, damping_);
+  }
   /* Hair-hair interactions, eq. 16-18. */
   const HairInteractionSettings interactions{params_.h2,
                                              params_.attraction_repulsion,
@@ -256,6 +268,12 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
       v = (v + carried) / (1.0f + params_.air_friction * dt) - carried;
     }
   });
+  if (params_.implicit_springs) {
+    spring_iterations_ += implicit_springs_
+                              .step(connections_, x_head_, alpha_k_, params_.spring_damping,
+                                    masses_, is_root_, dt, v_head_)
+                              .iterations;
+  }
   parallel_for(n, 4096, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       x_head_[size_t(i)] += dt * v_head_[size_t(i)];

@@ -9,11 +9,12 @@
  * relative to the head, whose motion enters as inertial forces. Inputs and outputs are in
  * world space.
  *
- * Integration: symplectic Euler. The damping forces, linear in the velocities (spring
- * damping, eq. 17-18, air friction, wind drag), are divided by m_i + Δt Σc, the diagonal of
- * their backward-Euler matrix, so that no damping constant can make a step unstable; they
- * vanish at rest, so equilibria are unchanged. The springs are explicit, and each frame
- * takes at least as many substeps as their highest frequency needs. */
+ * Integration: symplectic Euler. The damping forces, linear in the velocities (eq. 17-18,
+ * air friction, wind drag), are divided by m_i + Δt Σc, the diagonal of their backward-Euler
+ * matrix, so that no damping constant can make a step unstable; they vanish at rest, so
+ * equilibria are unchanged. The damped springs then take a backward-Euler step of their own
+ * (lcp/implicit_springs.hh), stable at any time step; or, with implicit_springs off, they are
+ * explicit and each frame takes as many substeps as their highest frequency needs. */
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
@@ -22,6 +23,7 @@
 #include "core/span.hh"
 #include "core/spatial_grid.hh"
 #include "lcp/body_collision_bando2003.hh"
+#include "lcp/implicit_springs.hh"
 #include "lcp/lcp_params.hh"
 #include "lcp/sampling_bando2003.hh"
 #include "lcp/springs_bando2003.hh"
@@ -63,6 +65,8 @@ class LcpSolver {
   int64_t interpenetrating_pairs_num() const { return interpenetrating_pairs_num_; }
   /* Substeps of the last frame: params.substeps, or more when the springs need them. */
   int substeps_used() const { return substeps_used_; }
+  /* Conjugate-gradient iterations of the implicit springs over the last frame. */
+  int spring_iterations() const { return spring_iterations_; }
 
   /* World space, after the last step. */
   Span<vec3> positions() const { return positions_wo_; }
@@ -118,7 +122,8 @@ class LcpSolver {
   SpatialGrid grid_;
   NeighborList neighbors_;
   std::vector<float> density_, k_, alpha_k_, side_sums_, damping_;
-  int substeps_used_ = 0;
+  int substeps_used_ = 0, spring_iterations_ = 0;
+  ImplicitSprings implicit_springs_;
   std::vector<vec3> forces_, damped_forces_;
 
   /* Wind. */

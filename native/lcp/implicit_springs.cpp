@@ -1,0 +1,175 @@
+#include "lcp/implicit_springs.hh"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.hh"
+
+namespace hairdyn {
+
+static constexpr int64_t grain = 1024;
+
+/* The particle at the other end of pair entry `code` (see LcpConnections::particle_pairs). */
+static inline int32_t partner(const LcpConnections &c, const int32_t code)
+{
+  const int32_t p = code >> 1;
+  return (code & 1) ? c.root[size_t(p)] : c.tip[size_t(p)];
+}
+
+double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3> r_product) const
+{
+  const LcpConnections &c = *connections_;
+  /* Returns dᵀ A d as well: one pass for the product and the dot product CG needs. */
+  return parallel_sum(d.size(), grain, [&](const IndexRange range) {
+    double dot = 0.0;
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      if (is_fixed_[i]) {
+        r_product[i] = vec3(0.0f);
+        continue;
+      }
+      const vec3 d_i = d[i];
+      vec3 y = masses_[i] * d_i;
+      for (int32_t k = c.particle_offsets[size_t(i)]; k < c.particle_offsets[size_t(i) + 1]; k++) {
+        const int32_t code = c.particle_pairs[size_t(k)];
+        const int32_t p = code >> 1;
+        /* Fixed partners have no unknown: d_j = 0 there. */
+        const vec3 d_ij = d_i - d[partner(c, code)];
+        y += along_[size_t(p)] * glm::dot(axis_[size_t(p)], d_ij) * axis_[size_t(p)] +
+             across_[size_t(p)] * d_ij;
+      }
+      r_product[i] = y;
+      dot += double(glm::dot(d_i, y));
+    }
+    return dot;
+  });
+}
+
+ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
+                                              const Span<vec3> positions,
+                                              const Span<float> alpha_k,
+                                              const float damping_time, const Span<float> masses,
+                                              const Span<uint8_t> is_fixed, const float dt,
+                                              const MutableSpan<vec3> r_velocities)
+{
+  const int64_t n = positions.size();
+  const int64_t pairs_num = connections.size();
+  connections_ = &connections;
+  masses_ = masses;
+  is_fixed_ = is_fixed;
+  axis_.resize(size_t(pairs_num));
+  along_.resize(size_t(pairs_num));
+  across_.resize(size_t(pairs_num));
+  for (std::vector<vec3> *buffer : {&rhs_, &dv_, &residual_, &preconditioned_, &direction_, &product_}) {
+    buffer->resize(size_t(n));
+  }
+  inverse_diagonal_.resize(size_t(n));
+
+  /* Pair blocks Δt C + Δt² K, and the spring forces of the step's start. */
+  stretch_force_.resize(size_t(pairs_num));
+  lateral_.resize(size_t(pairs_num));
+  parallel_for(pairs_num, grain, [&](const IndexRange range) {
+    for (int64_t p = range.start; p < range.one_after_last(); p++) {
+      const int32_t a = connections.root[size_t(p)], b = connections.tip[size_t(p)];
+      const vec3 x_ab = positions[b] - positions[a];
+      const float r = glm::length(x_ab);
+      const float ak = alpha_k[p];
+      if (r <= 0.0f || ak <= 0.0f) {
+        axis_[size_t(p)] = vec3(0.0f);
+        along_[size_t(p)] = across_[size_t(p)] = 0.0f;
+        stretch_force_[size_t(p)] = lateral_[size_t(p)] = 0.0f;
+        continue;
+      }
+      const float l = connections.rest_length[size_t(p)];
+      const float lateral = std::max(0.0f, 1.0f - l / r); /* PSD part of K's lateral term. */
+      lateral_[size_t(p)] = lateral;
+      axis_[size_t(p)] = x_ab / r;
+      along_[size_t(p)] = dt * damping_time * ak + dt * dt * ak * (1.0f - lateral);
+      across_[size_t(p)] = dt * dt * ak * lateral;
+      /* Elastic force on the root end, along x̂ (§3.3): α_ij k_ij (‖x_ij‖ − l_ij). */
+      stretch_force_[size_t(p)] = ak * (r - l);
+    }
+  });
+
+  /* Right-hand side Δt (f − Δt K v) and the inverse 3 × 3 diagonal blocks. */
+  const double rhs_norm = parallel_sum(n, grain, [&](const IndexRange range) {
+    double norm = 0.0;
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      if (is_fixed[i]) {
+        rhs_[size_t(i)] = vec3(0.0f);
+        inverse_diagonal_[size_t(i)] = mat3(0.0f);
+        continue;
+      }
+      const vec3 v_i = r_velocities[i];
+      vec3 force(0.0f), stiff_v(0.0f);
+      mat3 diagonal(masses[i]);
+      for (int32_t k = connections.particle_offsets[size_t(i)];
+           k < connections.particle_offsets[size_t(i) + 1]; k++)
+      {
+        const int32_t code = connections.particle_pairs[size_t(k)];
+        const int32_t p = code >> 1;
+        const vec3 &axis = axis_[size_t(p)];
+        /* x̂_ij points from i to its partner j. */
+        const vec3 x_hat = (code & 1) ? -axis : axis;
+        const vec3 v_ij = r_velocities[partner(connections, code)] - v_i;
+        const float ak = alpha_k[p], lateral = lateral_[size_t(p)];
+        /* Damped spring (§3.3): elastic α k (r − l) x̂ and damping γ α k (v_ij · x̂) x̂. */
+        force += (stretch_force_[size_t(p)] + damping_time * ak * glm::dot(v_ij, x_hat)) * x_hat;
+        /* K (v_i − v_j) of this pair. */
+        stiff_v -= ak * ((1.0f - lateral) * glm::dot(axis, v_ij) * axis + lateral * v_ij);
+        diagonal += along_[size_t(p)] * glm::outerProduct(axis, axis) + mat3(across_[size_t(p)]);
+      }
+      rhs_[size_t(i)] = dt * (force - dt * stiff_v);
+      inverse_diagonal_[size_t(i)] = glm::inverse(diagonal);
+      norm += double(glm::dot(rhs_[size_t(i)], inverse_diagonal_[size_t(i)] * rhs_[size_t(i)]));
+    }
+    return norm;
+  });
+
+  /* Preconditioned conjugate gradients from Δv = 0. */
+  Result result;
+  std::fill(dv_.begin(), dv_.end(), vec3(0.0f));
+  residual_ = rhs_;
+  parallel_for(n, grain, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      preconditioned_[size_t(i)] = inverse_diagonal_[size_t(i)] * residual_[size_t(i)];
+      direction_[size_t(i)] = preconditioned_[size_t(i)];
+    }
+  });
+  double rz = rhs_norm;
+  const double stop = double(tolerance) * double(tolerance) * rhs_norm;
+  while (rz > stop && result.iterations < max_iterations) {
+    const double pq = multiply_dot(direction_, product_);
+    if (!(pq > 0.0)) {
+      break;
+    }
+    const float alpha = float(rz / pq);
+    const double rz_next = parallel_sum(n, grain, [&](const IndexRange range) {
+      double dot = 0.0;
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        dv_[size_t(i)] += alpha * direction_[size_t(i)];
+        residual_[size_t(i)] -= alpha * product_[size_t(i)];
+        preconditioned_[size_t(i)] = inverse_diagonal_[size_t(i)] * residual_[size_t(i)];
+        dot += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
+      }
+      return dot;
+    });
+    const float beta = float(rz_next / rz);
+    rz = rz_next;
+    parallel_for(n, grain, [&](const IndexRange range) {
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        direction_[size_t(i)] = preconditioned_[size_t(i)] + beta * direction_[size_t(i)];
+      }
+    });
+    result.iterations++;
+  }
+  result.relative_residual = rhs_norm > 0.0 ? float(std::sqrt(rz / rhs_norm)) : 0.0f;
+
+  parallel_for(n, grain, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      r_velocities[i] += dv_[size_t(i)];
+    }
+  });
+  return result;
+}
+
+}  // namespace hairdyn
