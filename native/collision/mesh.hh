@@ -10,7 +10,6 @@
 
 namespace hairdyn {
 
-using glm::ivec3;
 static_assert(sizeof(ivec3) == 12, "ivec3 must be packed: it maps onto (T, 3) int32 arrays");
 
 struct MeshTraits : public OpenMesh::DefaultTraits {

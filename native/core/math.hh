@@ -7,6 +7,7 @@
 
 namespace hairdyn {
 
+using glm::ivec3;
 using glm::mat3;
 using glm::mat4;
 using glm::vec3;

@@ -21,36 +21,45 @@ template<typename Fn> void parallel_for(int64_t size, int64_t grain, const Fn &f
     fn(IndexRange{0, size});
     return;
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static, 1)
   for (int64_t chunk = 0; chunk < chunks; chunk++) {
     const int64_t start = chunk * grain;
     fn(IndexRange{start, std::min(grain, size - start)});
   }
 }
 
-/* Σ fn(range) over the same static chunks as parallel_for, added in chunk order in double
- * precision: the sum does not depend on the thread count either. */
-template<typename Fn> double parallel_sum(int64_t size, int64_t grain, const Fn &fn)
+/* fn(range) over the same static chunks as parallel_for, the chunks' results folded with
+ * combine(a, b) in chunk order from `identity`: the result does not depend on the thread
+ * count either. */
+template<typename T, typename Fn, typename Combine>
+T parallel_reduce(int64_t size, int64_t grain, const T &identity, const Fn &fn,
+                  const Combine &combine)
 {
   if (size <= 0) {
-    return 0.0;
+    return identity;
   }
   grain = std::max<int64_t>(grain, 1);
   const int64_t chunks = (size + grain - 1) / grain;
   if (chunks == 1) {
-    return fn(IndexRange{0, size});
+    return combine(identity, fn(IndexRange{0, size}));
   }
-  std::vector<double> partial(size_t(chunks), 0.0);
-#pragma omp parallel for schedule(static)
+  std::vector<T> partial(size_t(chunks), identity);
+#pragma omp parallel for schedule(static, 1)
   for (int64_t chunk = 0; chunk < chunks; chunk++) {
     const int64_t start = chunk * grain;
     partial[size_t(chunk)] = fn(IndexRange{start, std::min(grain, size - start)});
   }
-  double sum = 0.0;
-  for (const double value : partial) {
-    sum += value;
+  T result = identity;
+  for (const T &value : partial) {
+    result = combine(result, value);
   }
-  return sum;
+  return result;
+}
+
+/* Σ fn(range) in double precision, deterministic as parallel_reduce. */
+template<typename Fn> double parallel_sum(int64_t size, int64_t grain, const Fn &fn)
+{
+  return parallel_reduce(size, grain, 0.0, fn, [](const double a, const double b) { return a + b; });
 }
 
 /* Number of threads parallel_for uses; 0 restores the default (all cores). */

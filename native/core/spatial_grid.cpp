@@ -14,12 +14,10 @@ static int32_t cell_coordinate(const float x, const float cell_size)
   return int32_t(std::clamp(c, -1.0e9f, 1.0e9f));
 }
 
-uint32_t SpatialGrid::bucket_of_cell(const int32_t x, const int32_t y, const int32_t z) const
+ivec3 SpatialGrid::cell_of(const vec3 &p) const
 {
-  /* Teschner et al. 2003 spatial hash. */
-  const uint32_t h = (uint32_t(x) * 73856093u) ^ (uint32_t(y) * 19349663u) ^
-                     (uint32_t(z) * 83492791u);
-  return h & bucket_mask_;
+  return ivec3(cell_coordinate(p.x, cell_size_), cell_coordinate(p.y, cell_size_),
+               cell_coordinate(p.z, cell_size_));
 }
 
 void SpatialGrid::build(const Span<vec3> points, const float cell_size)
@@ -34,12 +32,11 @@ void SpatialGrid::build(const Span<vec3> points, const float cell_size)
   bucket_mask_ = buckets_num - 1;
 
   point_buckets_.resize(size_t(points.size()));
+  point_cells_.resize(size_t(points.size()));
   parallel_for(points.size(), 4096, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      const vec3 &p = points[i];
-      point_buckets_[size_t(i)] = bucket_of_cell(cell_coordinate(p.x, cell_size),
-                                                 cell_coordinate(p.y, cell_size),
-                                                 cell_coordinate(p.z, cell_size));
+      point_cells_[size_t(i)] = cell_of(points[i]);
+      point_buckets_[size_t(i)] = bucket_of_cell(point_cells_[size_t(i)]);
     }
   });
   /* Counting sort by bucket: stable, so indices inside a bucket stay in increasing order. */
@@ -56,24 +53,14 @@ void SpatialGrid::build(const Span<vec3> points, const float cell_size)
   for (int64_t i = 0; i < points.size(); i++) {
     fill[size_t(cursor[point_buckets_[size_t(i)]]++)] = int32_t(i);
   }
-}
-
-int SpatialGrid::neighbor_buckets(const vec3 &p, int32_t r_buckets[27]) const
-{
-  const int32_t cx = cell_coordinate(p.x, cell_size_);
-  const int32_t cy = cell_coordinate(p.y, cell_size_);
-  const int32_t cz = cell_coordinate(p.z, cell_size_);
-  int n = 0;
-  for (int32_t dz = -1; dz <= 1; dz++) {
-    for (int32_t dy = -1; dy <= 1; dy++) {
-      for (int32_t dx = -1; dx <= 1; dx++) {
-        r_buckets[n++] = int32_t(bucket_of_cell(cx + dx, cy + dy, cz + dz));
-      }
+  sorted_cells_.resize(size_t(points.size()));
+  sorted_points_.resize(size_t(points.size()));
+  parallel_for(points.size(), 4096, [&](const IndexRange range) {
+    for (int64_t k = range.start; k < range.one_after_last(); k++) {
+      sorted_cells_[size_t(k)] = point_cells_[size_t(sorted_indices_[size_t(k)])];
+      sorted_points_[size_t(k)] = points[sorted_indices_[size_t(k)]];
     }
-  }
-  /* Two cells may share a bucket: visit each bucket once. */
-  std::sort(r_buckets, r_buckets + n);
-  return int(std::unique(r_buckets, r_buckets + n) - r_buckets);
+  });
 }
 
 void find_neighbors(const SpatialGrid &grid, const Span<vec3> query_points, const float radius,

@@ -19,18 +19,27 @@ class SpatialGrid {
   void build(Span<vec3> points, float cell_size);
 
   /* Calls fn(j) for every point j with ‖points[j] − p‖ < radius (radius ≤ cell_size), in a
-   * fixed order (by cell bucket, then by index). */
+   * fixed order (the 27 cells around p in turn, then by index). */
   template<typename Fn> void for_each_in_radius(const vec3 &p, const float radius, Fn &&fn) const
   {
-    int32_t buckets[27];
-    const int buckets_num = neighbor_buckets(p, buckets);
+    const ivec3 center = cell_of(p);
     const float radius_sq = radius * radius;
-    for (int b = 0; b < buckets_num; b++) {
-      for (int32_t k = bucket_offsets_[buckets[b]]; k < bucket_offsets_[buckets[b] + 1]; k++) {
-        const int32_t j = sorted_indices_[k];
-        const vec3 d = points_[j] - p;
-        if (glm::dot(d, d) < radius_sq) {
-          fn(j);
+    for (int32_t dz = -1; dz <= 1; dz++) {
+      for (int32_t dy = -1; dy <= 1; dy++) {
+        for (int32_t dx = -1; dx <= 1; dx++) {
+          const ivec3 cell = center + ivec3(dx, dy, dz);
+          const uint32_t bucket = bucket_of_cell(cell);
+          for (int32_t k = bucket_offsets_[bucket]; k < bucket_offsets_[bucket + 1]; k++) {
+            /* A bucket may hold other cells' points too (hash collisions): skip them, so
+             * that a bucket shared by two of the 27 cells yields each point once. */
+            if (sorted_cells_[size_t(k)] != cell) {
+              continue;
+            }
+            const vec3 d = sorted_points_[size_t(k)] - p;
+            if (glm::dot(d, d) < radius_sq) {
+              fn(sorted_indices_[size_t(k)]);
+            }
+          }
         }
       }
     }
@@ -40,16 +49,25 @@ class SpatialGrid {
   Span<vec3> points() const { return points_; }
 
  private:
-  /* The distinct hash buckets of the 27 cells around p, sorted; returns their count. */
-  int neighbor_buckets(const vec3 &p, int32_t r_buckets[27]) const;
-  uint32_t bucket_of_cell(int32_t x, int32_t y, int32_t z) const;
+  ivec3 cell_of(const vec3 &p) const;
+  uint32_t bucket_of_cell(const ivec3 &cell) const
+  {
+    /* Teschner et al. 2003 spatial hash. */
+    const uint32_t h = (uint32_t(cell.x) * 73856093u) ^ (uint32_t(cell.y) * 19349663u) ^
+                       (uint32_t(cell.z) * 83492791u);
+    return h & bucket_mask_;
+  }
 
   Span<vec3> points_;
   float cell_size_ = 1.0f;
   uint32_t bucket_mask_ = 0;
   std::vector<int32_t> bucket_offsets_;
+  /* Points sorted by bucket: their indices, cells and positions (copied, for locality). */
   std::vector<int32_t> sorted_indices_;
+  std::vector<ivec3> sorted_cells_;
+  std::vector<vec3> sorted_points_;
   std::vector<uint32_t> point_buckets_;
+  std::vector<ivec3> point_cells_;
 };
 
 /* Neighbours of each query point as compressed rows: the neighbours of point i are

@@ -18,7 +18,7 @@ static inline int32_t partner(const LcpConnections &c, const int32_t code)
 
 double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3> r_product) const
 {
-  const LcpConnections &c = *connections_;
+  const std::vector<int32_t> &offsets = connections_->particle_offsets;
   /* Returns dᵀ A d as well: one pass for the product and the dot product CG needs. */
   return parallel_sum(d.size(), grain, [&](const IndexRange range) {
     double dot = 0.0;
@@ -29,13 +29,11 @@ double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3>
       }
       const vec3 d_i = d[i];
       vec3 y = masses_[i] * d_i;
-      for (int32_t k = c.particle_offsets[size_t(i)]; k < c.particle_offsets[size_t(i) + 1]; k++) {
-        const int32_t code = c.particle_pairs[size_t(k)];
-        const int32_t p = code >> 1;
+      for (int32_t k = offsets[size_t(i)]; k < offsets[size_t(i) + 1]; k++) {
+        const Entry &e = entries_[size_t(k)];
         /* Fixed partners have no unknown: d_j = 0 there. */
-        const vec3 d_ij = d_i - d[partner(c, code)];
-        y += along_[size_t(p)] * glm::dot(axis_[size_t(p)], d_ij) * axis_[size_t(p)] +
-             across_[size_t(p)] * d_ij;
+        const vec3 d_ij = d_i - d[e.partner];
+        y += e.along * glm::dot(e.axis, d_ij) * e.axis + e.across * d_ij;
       }
       r_product[i] = y;
       dot += double(glm::dot(d_i, y));
@@ -63,6 +61,10 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
     buffer->resize(size_t(n));
   }
   inverse_diagonal_.resize(size_t(n));
+  entries_.resize(connections.particle_pairs.size());
+  if (int64_t(guess_.size()) != n) {
+    guess_.assign(size_t(n), vec3(0.0f));
+  }
 
   /* Pair blocks Δt C + Δt² K, and the spring forces of the step's start. */
   stretch_force_.resize(size_t(pairs_num));
@@ -91,8 +93,7 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
   });
 
   /* Right-hand side Δt (f − Δt K v) and the inverse 3 × 3 diagonal blocks. */
-  const double rhs_norm = parallel_sum(n, grain, [&](const IndexRange range) {
-    double norm = 0.0;
+  parallel_for(n, grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       if (is_fixed[i]) {
         rhs_[size_t(i)] = vec3(0.0f);
@@ -117,44 +118,57 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
         /* K (v_i − v_j) of this pair. */
         stiff_v -= ak * ((1.0f - lateral) * glm::dot(axis, v_ij) * axis + lateral * v_ij);
         diagonal += along_[size_t(p)] * glm::outerProduct(axis, axis) + mat3(across_[size_t(p)]);
+        entries_[size_t(k)] = {partner(connections, code), along_[size_t(p)], across_[size_t(p)],
+                               axis};
       }
       rhs_[size_t(i)] = dt * (force - dt * stiff_v);
       inverse_diagonal_[size_t(i)] = glm::inverse(diagonal);
-      norm += double(glm::dot(rhs_[size_t(i)], inverse_diagonal_[size_t(i)] * rhs_[size_t(i)]));
     }
-    return norm;
   });
 
-  /* Preconditioned conjugate gradients from Δv = 0. */
-  Result result;
-  std::fill(dv_.begin(), dv_.end(), vec3(0.0f));
-  residual_ = rhs_;
-  parallel_for(n, grain, [&](const IndexRange range) {
+  /* Preconditioned conjugate gradients, starting from the previous step's Δv (from one
+   * substep to the next the springs' impulse changes little), until no particle's
+   * preconditioned residual, a velocity correction, exceeds the tolerance. */
+  struct Residual {
+    double rz = 0.0;          /* rᵀ P⁻¹ r */
+    float max_correction = 0; /* max_i ‖P_i⁻¹ r_i‖ */
+  };
+  const auto combine = [](const Residual &a, const Residual &b) {
+    return Residual{a.rz + b.rz, std::max(a.max_correction, b.max_correction)};
+  };
+  /* r_i −= alpha q_i, z_i = P_i⁻¹ r_i, and the sums. */
+  const auto update_residual = [&](const IndexRange range, const float alpha) {
+    Residual sums;
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      residual_[size_t(i)] -= alpha * product_[size_t(i)];
       preconditioned_[size_t(i)] = inverse_diagonal_[size_t(i)] * residual_[size_t(i)];
-      direction_[size_t(i)] = preconditioned_[size_t(i)];
+      sums.rz += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
+      sums.max_correction = std::max(sums.max_correction, glm::length(preconditioned_[size_t(i)]));
     }
-  });
-  double rz = rhs_norm;
-  const double stop = double(tolerance) * double(tolerance) * rhs_norm;
-  while (rz > stop && result.iterations < max_iterations) {
+    return sums;
+  };
+  Result result;
+  dv_ = guess_;
+  multiply_dot(dv_, product_); /* r = b − A Δv₀ */
+  residual_ = rhs_;
+  Residual residual = parallel_reduce(n, grain, Residual{}, [&](const IndexRange range) {
+    return update_residual(range, 1.0f);
+  }, combine);
+  direction_ = preconditioned_;
+  while (residual.max_correction > velocity_tolerance && result.iterations < max_iterations) {
     const double pq = multiply_dot(direction_, product_);
     if (!(pq > 0.0)) {
       break;
     }
-    const float alpha = float(rz / pq);
-    const double rz_next = parallel_sum(n, grain, [&](const IndexRange range) {
-      double dot = 0.0;
+    const float alpha = float(residual.rz / pq);
+    const Residual next = parallel_reduce(n, grain, Residual{}, [&](const IndexRange range) {
       for (int64_t i = range.start; i < range.one_after_last(); i++) {
         dv_[size_t(i)] += alpha * direction_[size_t(i)];
-        residual_[size_t(i)] -= alpha * product_[size_t(i)];
-        preconditioned_[size_t(i)] = inverse_diagonal_[size_t(i)] * residual_[size_t(i)];
-        dot += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
       }
-      return dot;
-    });
-    const float beta = float(rz_next / rz);
-    rz = rz_next;
+      return update_residual(range, alpha);
+    }, combine);
+    const float beta = float(next.rz / residual.rz);
+    residual = next;
     parallel_for(n, grain, [&](const IndexRange range) {
       for (int64_t i = range.start; i < range.one_after_last(); i++) {
         direction_[size_t(i)] = preconditioned_[size_t(i)] + beta * direction_[size_t(i)];
@@ -162,13 +176,14 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
     });
     result.iterations++;
   }
-  result.relative_residual = rhs_norm > 0.0 ? float(std::sqrt(rz / rhs_norm)) : 0.0f;
+  result.max_correction = residual.max_correction;
 
   parallel_for(n, grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       r_velocities[i] += dv_[size_t(i)];
     }
   });
+  guess_ = dv_;
   return result;
 }
 

@@ -12,7 +12,8 @@
  *
  * K keeping only its positive semi-definite part (a compressed spring's lateral term is
  * dropped). The matrix is then symmetric positive definite and is solved by conjugate
- * gradients with a block-Jacobi (3 × 3) preconditioner. The step is stable for any Δt: the
+ * gradients with a block-Jacobi (3 × 3) preconditioner, warm-started from the previous
+ * step's solution. The step is stable for any Δt: the
  * springs' stiffness no longer sets the number of substeps. */
 #include <vector>
 
@@ -26,8 +27,8 @@ class ImplicitSprings {
  public:
   struct Result {
     int iterations = 0;
-    /* Preconditioned residual norm over the right-hand side's, at the end. */
-    float relative_residual = 0.0f;
+    /* m/s: the largest velocity correction P_i⁻¹ r_i left at the end. */
+    float max_correction = 0.0f;
   };
 
   /* Adds to r_velocities the velocity change of one backward-Euler step of `dt` under the
@@ -37,8 +38,12 @@ class ImplicitSprings {
               float damping_time, Span<float> masses, Span<uint8_t> is_fixed, float dt,
               MutableSpan<vec3> r_velocities);
 
-  /* Relative tolerance of the conjugate gradients, and their iteration cap. */
-  float tolerance = 1e-3f;
+  /* Forgets the previous step's solution, the next solve's first guess. */
+  void reset() { guess_.clear(); }
+
+  /* m/s: the conjugate gradients stop when no particle's velocity correction is larger;
+   * and their iteration cap. */
+  float velocity_tolerance = 1e-5f;
   int max_iterations = 200;
 
  private:
@@ -53,8 +58,16 @@ class ImplicitSprings {
   std::vector<float> along_, across_;
   /* α_ij k_ij (‖x_ij‖ − l_ij), and max(0, 1 − l/r) of K's lateral term. */
   std::vector<float> stretch_force_, lateral_;
+  /* The pair blocks again, in each particle's row (LcpConnections::particle_pairs order), so
+   * that the product streams through memory. */
+  struct Entry {
+    int32_t partner;
+    float along, across;
+    vec3 axis;
+  };
+  std::vector<Entry> entries_;
   std::vector<mat3> inverse_diagonal_;
-  std::vector<vec3> rhs_, dv_, residual_, preconditioned_, direction_, product_;
+  std::vector<vec3> rhs_, dv_, residual_, preconditioned_, direction_, product_, guess_;
 };
 
 }  // namespace hairdyn

@@ -114,6 +114,7 @@ void LcpSolver::reset()
   head_omega_wo_ = vec3(0.0f);
   air_x_wo_.clear();
   air_v_wo_.clear();
+  implicit_springs_.reset();
   compute_spring_coefficients(connections_, x_head_, cross_sections_, params_.h1,
                               params_.young_modulus, k_, alpha_k_, side_sums_);
   grid_.build(x_head_, 2.0f * params_.h2);

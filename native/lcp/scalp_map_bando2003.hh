@@ -11,7 +11,6 @@
 
 namespace hairdyn {
 
-using glm::ivec3;
 using glm::vec2;
 
 /* Empty when the patch can be mapped; otherwise one sentence: no faces, bad indices, a
