@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "lcp_scenes.hh"
 
@@ -178,4 +179,35 @@ TEST(LcpScalp, GroomStrandsBecomeParticles)
   }
   params.particle_num = 40;
   EXPECT_EQ(sample_groom_particles(offsets, points, root_uv, params).size(), 40);
+}
+
+/* Even spacing of the rest state: a clump of particles pressed against a floor (the body)
+ * spreads out until no pair is closer than the minimum, fixed particles stay, and every moved
+ * particle stays above the floor. */
+TEST(LcpScalp, CloseParticlesAreSpacedOutAndKeptOutOfTheBody)
+{
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> offset(-0.005f, 0.005f);
+  std::vector<vec3> positions;
+  std::vector<uint8_t> is_fixed;
+  for (int i = 0; i < 200; i++) {
+    positions.push_back(vec3(offset(rng), offset(rng), 0.0005f * float(i % 4)));
+    is_fixed.push_back(i % 10 == 0 ? 1 : 0);
+  }
+  const std::vector<vec3> before = positions;
+  const float min_distance = 0.004f;
+  const int64_t left = separate_close_particles(
+      positions, is_fixed, min_distance, 200, [](vec3 &p) { p.z = std::max(p.z, 0.0f); });
+  EXPECT_EQ(left, 0);
+  for (size_t i = 0; i < positions.size(); i++) {
+    EXPECT_GE(positions[i].z, 0.0f);
+    if (is_fixed[i]) {
+      EXPECT_EQ(positions[i], before[i]);
+    }
+    for (size_t j = i + 1; j < positions.size(); j++) {
+      if (!(is_fixed[i] && is_fixed[j])) {
+        EXPECT_GE(glm::length(positions[i] - positions[j]), 0.99f * min_distance) << i << " " << j;
+      }
+    }
+  }
 }

@@ -39,6 +39,7 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
     t_rest_head_[size_t(i)] = glm::normalize(to_head * particles_wo.directions[size_t(i)]);
     is_root_[size_t(i)] = s_[size_t(i)] < 0.0f ? 1 : 0;
   }
+  separate_close_particles(x_rest_head_, is_root_, rest_min_distance(), 20, [](vec3 &) {});
 
   /* Particle mass: the hair density ρ_h divided by the mean SPH number density of the rest
    * state (eq. 1 with unit masses), so that eq. 1 gives ρ_h on average at rest. */
@@ -82,25 +83,27 @@ void LcpSolver::set_body_contact(LcpContactQuery query)
   }
   const mat3 rotation = head_rest_.matrix();
   const mat3 to_head = glm::transpose(rotation);
-  bool moved = false;
-  for (size_t i = 0; i < x_rest_head_.size(); i++) {
-    if (is_root_[i]) {
-      continue;
-    }
+  /* On the surface, a hair's breadth outside. */
+  const auto out_of_body = [&](vec3 &x_head) {
     LcpContact contact;
-    if (contact_query_(rotation * x_rest_head_[i] + head_rest_.translation, contact)) {
-      /* On the surface, a hair's breadth outside. */
-      const vec3 outside_wo = contact.surface_point_wo + 1e-4f * contact.normal_wo;
-      x_rest_head_[i] = to_head * (outside_wo - head_rest_.translation);
-      moved = true;
+    if (contact_query_(rotation * x_head + head_rest_.translation, contact)) {
+      x_head = to_head * (contact.surface_point_wo + 1e-4f * contact.normal_wo -
+                          head_rest_.translation);
     }
-  }
-  if (moved) {
-    connections_ = build_connections(x_rest_head_, t_rest_head_, is_root_, params_.h1,
-                                     params_.a0, params_.neighbor_num);
-    k_.resize(size_t(connections_.size()));
-    alpha_k_.resize(size_t(connections_.size()));
-  }
+  };
+  parallel_for(int64_t(x_rest_head_.size()), 1024, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      if (!is_root_[size_t(i)]) {
+        out_of_body(x_rest_head_[size_t(i)]);
+      }
+    }
+  });
+  /* The particles put back on the surface land on each other: space them out again. */
+  separate_close_particles(x_rest_head_, is_root_, rest_min_distance(), 20, out_of_body);
+  connections_ = build_connections(x_rest_head_, t_rest_head_, is_root_, params_.h1, params_.a0,
+                                   params_.neighbor_num);
+  k_.resize(size_t(connections_.size()));
+  alpha_k_.resize(size_t(connections_.size()));
   reset();
 }
 

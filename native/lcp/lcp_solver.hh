@@ -52,10 +52,11 @@ class LcpSolver {
   void step(float frame_dt, const mat4 &head_to_world);
   /* Back to the rest state and the rest head transform; the wind starts over. */
   void reset();
-  /* Body collisions (see lcp/body_collision_bando2003.hh); an empty query turns them off. */
-  /* The body the hair collides with (§3.5). Rest particles inside it (a beam-shaped initial
-   * hair ignores the body) are first moved onto its surface and connected again, so the
-   * simulation starts from a state the contact response will not tear apart; then reset(). */
+  /* The body the hair collides with (§3.5, lcp/body_collision_bando2003.hh; an empty query
+   * turns collisions off). Rest particles inside it (a beam-shaped initial
+   * hair ignores the body) are first moved onto its surface, spaced out again and connected
+   * again, so the simulation starts from a state the contact response will not tear apart;
+   * then reset(). */
   void set_body_contact(LcpContactQuery query);
 
   const LcpParams &params() const { return params_; }
@@ -97,6 +98,9 @@ class LcpSolver {
     vec3 acceleration_head;
     vec3 angular_acceleration_head;
   };
+  /* Rest particles are spaced at least this far apart (separate_close_particles): above the
+   * h₂/2 of count_close_pairs, so the rest state has no interpenetrating pair. */
+  float rest_min_distance() const { return 0.6f * params_.h2; }
   void substep(float dt, const HeadState &mid, const HeadState &end);
   void accumulate_wind(float dt, const HeadState &mid);
   void collide_with_body(const HeadState &end);

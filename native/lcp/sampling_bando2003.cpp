@@ -6,6 +6,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "core/parallel.hh"
+#include "core/spatial_grid.hh"
 #include "groom/groom.hh"
 
 namespace hairdyn {
@@ -356,6 +358,56 @@ LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Spa
     particles.s.push_back(cand.s);
   }
   return particles;
+}
+
+
+int64_t separate_close_particles(const MutableSpan<vec3> positions, const Span<uint8_t> is_fixed,
+                                 const float min_distance, const int iterations,
+                                 const std::function<void(vec3 &)> &constrain)
+{
+  const int64_t n = positions.size();
+  std::vector<vec3> pushes(static_cast<size_t>(n));
+  SpatialGrid grid;
+  NeighborList neighbors;
+  const auto count_close = [&]() {
+    grid.build(positions, min_distance);
+    find_neighbors(grid, positions, 0.99f * min_distance, true, neighbors);
+    int64_t count = 0;
+    for (int64_t i = 0; i < n; i++) {
+      for (const int32_t j : neighbors.neighbors_of(i)) {
+        count += (j > i && !(is_fixed[i] && is_fixed[j])) ? 1 : 0;
+      }
+    }
+    return count;
+  };
+  int64_t close_num = count_close();
+  for (int iteration = 0; iteration < iterations && close_num > 0; iteration++) {
+    parallel_for(n, 1024, [&](const IndexRange range) {
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        vec3 push(0.0f);
+        if (!is_fixed[i]) {
+          for (const int32_t j : neighbors.neighbors_of(i)) {
+            const vec3 d = positions[i] - positions[j];
+            const float dist = glm::length(d);
+            if (dist > 0.0f) {
+              push += (is_fixed[j] ? 1.0f : 0.5f) * (min_distance - dist) / dist * d;
+            }
+          }
+        }
+        pushes[size_t(i)] = push;
+      }
+    });
+    parallel_for(n, 1024, [&](const IndexRange range) {
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        if (pushes[size_t(i)] != vec3(0.0f)) {
+          positions[i] += pushes[size_t(i)];
+          constrain(positions[i]);
+        }
+      }
+    });
+    close_num = count_close();
+  }
+  return close_num;
 }
 
 }  // namespace hairdyn

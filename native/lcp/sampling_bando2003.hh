@@ -3,6 +3,7 @@
  * between s = −s_r and the length map L(u, v), with the distance of eq. 3; root particles
  * (s < 0) inside the scalp, the others placed by Anjyo's cantilever beam. Or: samples along
  * an existing groom's strands. */
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,17 @@ void cantilever_beam(const vec3 &root, const vec3 &root_dir, const vec3 &gravity
  * unit gravity direction in that space (world −Z for a world-space scalp). */
 LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &length,
                                     const LcpParams &params, const vec3 &gravity_dir);
+
+/* Even spacing of the rest state. §3.2 wants the particles to sample the hair volume evenly,
+ * but eq. 3 measures distance on the scalp: where strands converge as they bend, or where
+ * particles were put back onto the body, two samples can nearly coincide. Pushes apart every
+ * pair closer than `min_distance` in Jacobi sweeps (a free particle moves by half of each
+ * overlap, or all of it against a fixed one; fixed ones stay), calling `constrain` on each
+ * moved particle after a sweep (e.g. back out of the body), for at most `iterations` sweeps.
+ * Returns the pairs still closer than 0.99 min_distance. */
+int64_t separate_close_particles(MutableSpan<vec3> positions, Span<uint8_t> is_fixed,
+                                 float min_distance, int iterations,
+                                 const std::function<void(vec3 &)> &constrain);
 
 /* Particles along an existing groom (curves): (u, v) from the strand's root (root_uv, two
  * floats per strand, or empty: the roots' bounding box projected on its two widest axes),
