@@ -276,7 +276,10 @@ def test_lcp_particles_from_the_groom(open_fixture):
     last[offsets[1:-1] - 1] = False  # no segment from one strand's tip to the next root
     strands = s >= 0.0
     assert strands.sum() > 100
-    assert distances_to_segments(positions[strands], points[:-1][last], points[1:][last]).max() < 1e-4
+    off_strand = distances_to_segments(positions[strands], points[:-1][last], points[1:][last])
+    # On the strands; the few that sat closer than 0.6 h2 to a neighbour were spaced out.
+    assert np.quantile(off_strand, 0.95) < 1e-4
+    assert off_strand.max() < 0.3 * hair.hairdyn.lcp.h2
     from_roots = np.abs(uv[:, None, :] - groom.root_uvs[None, :, :]).sum(axis=2).min(axis=1)
     assert from_roots.max() < 1e-6
     while not runner.done:
