@@ -176,9 +176,10 @@ void LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
 
   /* The frame is cut into at least `substeps` equal substeps, short enough for the explicit
    * pressure's CFL bound 0.6 h₂ / c, with the sound speed c = √(dP/dρ) = √k_a of eq. 16
-   * (the Fig. 6 scene went unstable near 1.4 h₂ / c). Explicit springs also keep each substep below 1.8 / ω, ω² = 2 max_i Σ_j α_ij k_ij / m
-   * (Gershgorin bound; symplectic Euler is stable below 2 / ω); α grows as connections
-   * weaken, so ω is re-evaluated every substep. */
+   * (the Fig. 6 scene went unstable near 1.4 h₂ / c). Explicit springs also keep each
+   * substep below 1.8 / ω, ω² = 2 max_i Σ_j α_ij k_ij / m (Gershgorin bound; symplectic
+   * Euler is stable below 2 / ω); α grows as connections weaken, so ω is re-evaluated every
+   * substep. */
   int substeps = std::max(1, params_.substeps);
   if (params_.attraction_repulsion && params_.pressure_stiffness > 0.0f) {
     const float dt_cfl = 0.6f * params_.h2 / std::sqrt(params_.pressure_stiffness);
