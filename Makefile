@@ -4,7 +4,7 @@ CMAKE := /usr/bin/cmake
 BUILD := build
 JOBS ?= 2
 
-.PHONY: setup build test demo bench package fixtures clean
+.PHONY: setup build test demo demo-lcp bench package fixtures clean
 
 setup:
 	@scripts/setup.sh
@@ -18,6 +18,9 @@ test: build
 
 demo: build
 	blender -b blend_fixtures/head_shake.blend --python-exit-code 1 --python scripts/demo.py -- $(CURDIR)/out/demo
+
+demo-lcp: build
+	blender -b blend_fixtures/head_shake.blend --python-exit-code 1 --python scripts/demo.py -- $(CURDIR)/out/demo_lcp LCP
 
 bench: build
 	$(BUILD)/hairdyn_bench --benchmark_counters_tabular=true

@@ -1,7 +1,10 @@
 """The main job: bake the shipped head-shake example with strand dynamics and collision,
 render a few frames in Cycles into one contact sheet, print the timings and the quality report.
 
-    blender -b blend_fixtures/head_shake.blend --python scripts/demo.py -- OUT_DIR
+    blender -b blend_fixtures/head_shake.blend --python scripts/demo.py -- OUT_DIR [METHOD]
+
+METHOD is STRANDS (the default) or LCP (loosely connected particles, shown as billboards,
+with the groom's strands carried by them).
 """
 import json
 import sys
@@ -48,14 +51,14 @@ def save_sheet(tiles, path, columns=3):
     image.save()
 
 
-def main(out_dir):
+def main(out_dir, method):
     out_dir.mkdir(parents=True, exist_ok=True)
     if not hasattr(bpy.types.Object, "hairdyn"):
         hairdyn.register()
     scene = bpy.context.scene
     hair = bpy.data.objects["Hair"]
     settings = hair.hairdyn
-    settings.method = 'STRANDS'
+    settings.method = method
     settings.cache_directory = str(out_dir / "cache")
     view_layer = bpy.context.view_layer
     view_layer.objects.active = hair
@@ -81,8 +84,11 @@ def main(out_dir):
     render_s = time.perf_counter() - start
     sheet = out_dir / "demo_contact_sheet.png"
     save_sheet(tiles, sheet)
+    carried = (f"{report['particles']} particles, {report['pairs']} pairs, "
+               f"{report['interpenetrating_pairs']} interpenetrating at the end"
+               if method == 'LCP' else f"{settings.strands.children_per_guide} children each")
     print(f"hairdyn demo: baked {report['frames']} frames of {report['strands']} strands "
-          f"({report['points']} points, {settings.strands.children_per_guide} children each) "
+          f"({report['points']} points, {carried}) "
           f"in {bake_s:.1f} s: {report['ms_per_frame']:.2f} ms per frame of native stepping "
           f"(solver '{report['solver']}', Blender {report['blender_version']})")
     print(f"hairdyn demo: quality: stretch {report['stretch_max']:.1e}, penetration max "
@@ -93,4 +99,6 @@ def main(out_dir):
     print(f"hairdyn demo: cache {cache.directory}, report {out_dir / 'demo_report.json'}")
 
 
-main(Path(sys.argv[sys.argv.index("--") + 1] if "--" in sys.argv else ROOT / "out" / "demo"))
+ARGS = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+main(Path(ARGS[0]) if ARGS else ROOT / "out" / "demo",
+     ARGS[1].upper() if len(ARGS) > 1 else 'STRANDS')

@@ -67,6 +67,12 @@ def to_world(matrix_world, points):
     return np.ascontiguousarray((points @ m[:3, :3].T + m[:3, 3]).astype(np.float32))
 
 
+def to_local(matrix_world, points):
+    """(N, 3) world-space points into the object's space, in float64."""
+    m = np.linalg.inv(np.asarray(matrix_world, dtype=np.float64))
+    return np.asarray(points, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
+
+
 def hair_particle_system(obj):
     """The mesh's hair particle system (the active one if it is hair), or None."""
     if obj is None or obj.type != 'MESH':

@@ -36,27 +36,32 @@ def head_object(hair_obj, groom):
     return head
 
 
-def root_normals(groom, head_mesh, chunk=2048):
+def root_normals(groom, head_mesh):
     """Per strand, the world normal of the head-mesh vertex nearest to its root."""
-    roots = groom.positions_wo[groom.curve_offsets[:-1]].astype(np.float64)
-    vertices = head_mesh.vertices_wo().astype(np.float64)
-    normals = head_mesh.normals_wo()
-    nearest = np.empty(len(roots), dtype=np.int64)
-    for start in range(0, len(roots), chunk):
-        block = roots[start:start + chunk]
-        distances = ((block[:, None, :] - vertices[None, :, :]) ** 2).sum(axis=2)
-        nearest[start:start + chunk] = distances.argmin(axis=1)
-    return np.ascontiguousarray(normals[nearest], dtype=np.float32)
+    closest = nearest(groom.positions_wo[groom.curve_offsets[:-1]], head_mesh.vertices_wo())[0]
+    return np.ascontiguousarray(head_mesh.normals_wo()[closest[:, 0]], dtype=np.float32)
 
 
-def _nearest_distances(points, targets, chunk=2048):
-    """Distance from each point to its nearest target (brute force in chunks)."""
-    result = np.empty(len(points))
+def nearest(points, targets, k=1, chunk=1024):
+    """The k targets nearest to each point (brute force in chunks): indices and distances,
+    (P, k) each, in no particular order among the k."""
+    points = np.asarray(points, dtype=np.float64)
+    targets = np.asarray(targets, dtype=np.float64)
+    k = min(k, len(targets))
+    indices = np.empty((len(points), k), dtype=np.int64)
+    distances = np.empty((len(points), k))
     for start in range(0, len(points), chunk):
-        block = points[start:start + chunk]
-        result[start:start + chunk] = np.sqrt(
-            ((block[:, None, :] - targets[None, :, :]) ** 2).sum(axis=2).min(axis=1))
-    return result
+        block = ((points[start:start + chunk, None, :] - targets[None, :, :]) ** 2).sum(axis=2)
+        found = np.argpartition(block, k - 1, axis=1)[:, :k] if k > 1 else block.argmin(axis=1)[:, None]
+        indices[start:start + chunk] = found
+        distances[start:start + chunk] = np.sqrt(np.take_along_axis(block, found, axis=1))
+    return indices, distances
+
+
+def blend_weights(distances):
+    """Inverse-distance weights over each row, summing to 1."""
+    weights = 1.0 / np.maximum(distances, 1e-6)
+    return weights / weights.sum(axis=1, keepdims=True)
 
 
 def scalp_points(groom, head_mesh, count, seed):
@@ -65,12 +70,11 @@ def scalp_points(groom, head_mesh, count, seed):
     root."""
     roots = groom.positions_wo[groom.curve_offsets[:-1]].astype(np.float64)
     if len(roots) > 1:
-        spacing = np.median(np.sort(np.sqrt(((roots[:, None] - roots[None]) ** 2).sum(axis=2)),
-                                    axis=1)[:, 1])
+        spacing = np.median(nearest(roots, roots, 2)[1].max(axis=1))  # itself, and the next
     else:
         spacing = np.linalg.norm(groom.positions_wo[1] - groom.positions_wo[0])
     vertices = head_mesh.vertices_wo().astype(np.float64)
-    near = _nearest_distances(vertices, roots) <= 2.0 * spacing
+    near = nearest(vertices, roots)[1][:, 0] <= 2.0 * spacing
     triangles = head_mesh.triangles[near[head_mesh.triangles].all(axis=1)]
     if len(triangles) == 0:
         raise HairdynError("No part of the head lies under the hair roots: interpolated "
@@ -181,59 +185,76 @@ def length_weights(groom, scalp_vertices_wo):
     segments = np.linalg.norm(np.diff(groom.positions_wo.astype(np.float64), axis=0), axis=1)
     segments[groom.curve_offsets[1:-1] - 1] = 0.0  # no segment between two strands
     lengths = np.add.reduceat(np.append(segments, 0.0), groom.curve_offsets[:-1])
-    roots = groom.positions_wo[groom.curve_offsets[:-1]].astype(np.float64)
-    nearest = np.empty(len(scalp_vertices_wo), dtype=np.int64)
-    for start in range(0, len(scalp_vertices_wo), 2048):
-        block = scalp_vertices_wo[start:start + 2048].astype(np.float64)
-        nearest[start:start + 2048] = ((block[:, None] - roots[None]) ** 2).sum(axis=2).argmin(axis=1)
+    closest = nearest(scalp_vertices_wo, groom.positions_wo[groom.curve_offsets[:-1]])[0][:, 0]
     longest = float(lengths.max())
-    return np.ascontiguousarray(lengths[nearest] / longest, dtype=np.float32), longest
+    return np.ascontiguousarray(lengths[closest] / longest, dtype=np.float32), longest
 
 
 class ParticleSkin:
-    """LCP's motion on real strands (Bando 2003 §4): every strand point follows the particles
-    nearest to it at rest, each carrying the point's rest offset from it (inverse-distance
-    weights over `neighbours_num` particles); roots follow the head rigidly. Then, root to
-    tip, each point is put at its rest distance from the previous one toward where the
-    particles carried it, so strands never stretch while the volume deforms."""
+    """LCP's motion on real strands (Bando 2003 §4): every strand point moves with the
+    particles near its (u, v, s), in the distance of eq. 3 (scalp points apart, and arc
+    length). A strand point's scalp point is its root and s its arc length; a particle's
+    scalp point is where its hair leaves the scalp: x − s t for the fixed root particles, and
+    for the others that of the root particles nearest in (u, v). In the head's frame, the
+    point is displaced by the inverse-distance blend of the displacements of the
+    `neighbours_num` nearest particles since rest, so the groom keeps its shape at rest and
+    takes the particles' motion, and the head's own motion is carried exactly. Roots follow the
+    head rigidly; then, root to tip, each point is put at its rest distance from the previous
+    one toward where it was carried, or where the body's surface is when that is inside a
+    collider, so strands never stretch nor go through the body."""
 
-    def __init__(self, groom, particles_rest_wo, head_matrix, neighbours_num=4, chunk=1024):
-        self.rest = np.ascontiguousarray(groom.positions_wo, dtype=np.float32)
+    def __init__(self, groom, solver, head_matrix, neighbours_num=4):
         offsets = groom.curve_offsets
-        self.roots = offsets[:-1]
-        points = self.rest.astype(np.float64)
-        particles = particles_rest_wo.astype(np.float64)
-        k = min(neighbours_num, len(particles))
-        self.neighbours = np.empty((len(points), k), dtype=np.int64)
-        weights = np.empty((len(points), k))
-        for start in range(0, len(points), chunk):
-            block = points[start:start + chunk]
-            distances = np.sqrt(((block[:, None, :] - particles[None, :, :]) ** 2).sum(axis=2))
-            nearest = np.argpartition(distances, k - 1, axis=1)[:, :k]
-            self.neighbours[start:start + chunk] = nearest
-            weights[start:start + chunk] = 1.0 / np.maximum(
-                np.take_along_axis(distances, nearest, axis=1), 1e-6)
-        self.weights = weights / weights.sum(axis=1, keepdims=True)
-        self.offset = points - (self.weights[:, :, None] * particles[self.neighbours]).sum(axis=1)
-        inverse = np.linalg.inv(np.asarray(head_matrix, dtype=np.float64))
-        self.roots_head = (self.rest[self.roots] @ inverse[:3, :3].T + inverse[:3, 3])
-        # Point k of every strand long enough to have one, and its rest segment length.
         counts = np.diff(offsets)
-        self.layers = [self.roots[counts > k] + k for k in range(1, int(counts.max()))]
+        self.roots = offsets[:-1]
+        points = groom.positions_wo.astype(np.float64)
         self.rest_lengths = np.zeros(len(points))
         self.rest_lengths[1:] = np.linalg.norm(np.diff(points, axis=0), axis=1)
+        self.rest_lengths[self.roots] = 0.0  # no segment from one strand's tip to the next root
+        arc = np.cumsum(self.rest_lengths)
+        arc -= np.repeat(arc[self.roots], counts)
+        strand_points = np.column_stack([np.repeat(points[self.roots], counts, axis=0), arc])
 
-    def apply(self, particles_wo, head_matrix):
-        """Strand positions (N, 3) float32 for the particles' current positions."""
-        moved = (self.weights[:, :, None] * np.asarray(particles_wo)[self.neighbours]).sum(axis=1)
-        targets = moved + self.offset
+        x = np.asarray(solver.positions, dtype=np.float64)
+        t = np.asarray(solver.directions, dtype=np.float64)
+        s = np.asarray(solver.s, dtype=np.float64)
+        scalp = x - s[:, None] * t
+        root = s < 0.0
+        if root.any() and not root.all():
+            uv = np.column_stack([solver.u, solver.v]).astype(np.float64)
+            near, distances = nearest(uv[~root], uv[root], 3)
+            scalp[~root] = (blend_weights(distances)[:, :, None] * scalp[root][near]).sum(axis=1)
+        self.neighbours, distances = nearest(strand_points, np.column_stack([scalp, s]),
+                                             neighbours_num)
+        self.weights = blend_weights(distances)
+        self.rest_head = bridge.to_local(head_matrix, points)
+        self.particles_rest_head = bridge.to_local(head_matrix, x)
+        # Point k of every strand long enough to have one.
+        self.layers = [self.roots[counts > k] + k for k in range(1, int(counts.max()))]
+
+    def apply(self, particles_wo, head_matrix, colliders=None):
+        """Strand positions (N, 3) float32 for the particles' current positions; `colliders`
+        (a native ColliderSet, or None) keeps the points out of the body."""
+        moved = bridge.to_local(head_matrix, np.asarray(particles_wo, dtype=np.float64))
+        moved -= self.particles_rest_head
+        targets = bridge.to_world(head_matrix, self.rest_head + (
+            self.weights[:, :, None] * moved[self.neighbours]).sum(axis=1))
         positions = np.empty_like(targets)
-        positions[self.roots] = bridge.to_world(head_matrix, self.roots_head)
+        positions[self.roots] = bridge.to_world(head_matrix, self.rest_head[self.roots])
+
+        def toward(layer, target):
+            step = target - positions[layer - 1]
+            length = np.maximum(np.linalg.norm(step, axis=1, keepdims=True), 1e-12)
+            return positions[layer - 1] + step * (self.rest_lengths[layer, None] / length)
+
         for layer in self.layers:  # root to tip, all strands at once
-            toward = targets[layer] - positions[layer - 1]
-            length = np.maximum(np.linalg.norm(toward, axis=1, keepdims=True), 1e-12)
-            positions[layer] = positions[layer - 1] + toward * (self.rest_lengths[layer, None] / length)
-        return positions.astype(np.float32)
+            positions[layer] = toward(layer, targets[layer])
+            for _ in range(0 if colliders is None else 2):  # swung out where it went inside
+                contacts = colliders.find_contacts(positions[layer])
+                inside = contacts["hit"] & (contacts["depth"] > 0.0)
+                surface = contacts["surface_point"][inside] + 1e-4 * contacts["normal"][inside]
+                positions[layer[inside]] = toward(layer[inside], surface)
+        return positions
 
 
 class Simulation:
@@ -278,8 +299,9 @@ class Simulation:
             elif self.method == 'LCP':  # moves rest particles out of the body: skin after it
                 self.solver.set_colliders(self.colliders.set)
         if self.method == 'LCP':
-            self.skin = ParticleSkin(self.groom, np.array(self.solver.positions), head_matrix)
-            self.strand_positions = self.skin.rest.copy()
+            self.skin = ParticleSkin(self.groom, self.solver, head_matrix)
+            self.strand_positions = self.skin.apply(self.solver.positions, head_matrix,
+                                                    self._collider_set())
         self.previous_positions = np.array(self.positions)
         self.velocities = np.zeros_like(self.previous_positions)
         self.collision_ms = 0.0
@@ -315,6 +337,9 @@ class Simulation:
         return self.native.ChildHairs.between_guides(
             self.groom.curve_offsets, self.groom.positions_wo, self.solver.root_frames, roots)
 
+    def _collider_set(self):
+        return None if self.colliders is None else self.colliders.set
+
     @property
     def positions(self):
         """World-space strand positions (N, 3) float32: the solver's buffer (zero-copy), or
@@ -333,7 +358,8 @@ class Simulation:
         self.solver.step(frame_dt, head_matrix)
         elapsed_ms = (time.perf_counter() - start) * 1000.0
         if self.skin is not None:
-            self.strand_positions = self.skin.apply(self.solver.positions, head_matrix)
+            self.strand_positions = self.skin.apply(self.solver.positions, head_matrix,
+                                                    self._collider_set())
         positions = self.positions
         self.velocities = (positions - self.previous_positions) / np.float32(frame_dt)
         self.previous_positions[:] = positions
