@@ -146,9 +146,8 @@ class HAIRDYN_PT_lcp(_SubPanel, bpy.types.Panel):
         column.prop(lcp, "particle_num")
         column.prop(lcp, "root_depth")
         column.prop(lcp, "beam_length")
-        row = layout.row()
-        row.prop(lcp, "substeps")
-        row.prop(lcp, "implicit_springs", text="Implicit")
+        layout.prop(lcp, "substeps")
+        layout.prop(lcp, "implicit_springs")
         for name in ("h1", "a0", "neighbor_num", "young_modulus", "material_density",
                      "spring_damping", "hair_density"):
             layout.prop(lcp, name)
