@@ -165,7 +165,7 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
         name='Connections per Particle (N_n)', default=12, min=1, max=1000,
         description='N_n: Connections kept per particle, strongest c_ij W(l_ij, h₁) first (§3.2)')
     young_modulus: FloatProperty(
-        name="Young's Modulus (E)", default=10000.0, min=0.0, max=1000000000000.0, precision=1,
+        name="Young's Modulus (E)", default=10000.0, min=0.0, max=1000000000.0, precision=1,
         description="E, Pa: Tensile Young's modulus kept constant per particle (eq. 10-14)")
     material_density: FloatProperty(
         name='Material Density (δ)', default=1300.0, min=1.0, max=100000.0, precision=4,
