@@ -13,8 +13,8 @@
  * K keeping only its positive semi-definite part (a compressed spring's lateral term is
  * dropped). The matrix is then symmetric positive definite and is solved by conjugate
  * gradients with a block-Jacobi (3 × 3) preconditioner, warm-started from the previous
- * step's solution. The step is stable for any Δt: the
- * springs' stiffness no longer sets the number of substeps. */
+ * step's solution. The step is stable for any Δt: the springs' stiffness no longer sets the
+ * number of substeps. */
 #include <vector>
 
 #include "core/math.hh"
