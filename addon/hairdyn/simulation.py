@@ -179,12 +179,18 @@ def group_length_weights(head, group_name, scalp_head_vertices):
     return np.ascontiguousarray(weights, dtype=np.float32)
 
 
+def segment_lengths(groom):
+    """Per point, the length of the segment that ends at it (0 at the roots), float64."""
+    lengths = np.zeros(len(groom.positions_wo))
+    lengths[1:] = np.linalg.norm(np.diff(groom.positions_wo.astype(np.float64), axis=0), axis=1)
+    lengths[groom.curve_offsets[:-1]] = 0.0  # no segment from one strand's tip to the next root
+    return lengths
+
+
 def length_weights(groom, scalp_vertices_wo):
     """The length map of Bando 2003 §3.2 from a groom: per scalp vertex, the length of the
     strand rooted nearest to it, over the longest strand; and that longest length (m)."""
-    segments = np.linalg.norm(np.diff(groom.positions_wo.astype(np.float64), axis=0), axis=1)
-    segments[groom.curve_offsets[1:-1] - 1] = 0.0  # no segment between two strands
-    lengths = np.add.reduceat(np.append(segments, 0.0), groom.curve_offsets[:-1])
+    lengths = np.add.reduceat(segment_lengths(groom), groom.curve_offsets[:-1])
     closest = nearest(scalp_vertices_wo, groom.positions_wo[groom.curve_offsets[:-1]])[0][:, 0]
     longest = float(lengths.max())
     return np.ascontiguousarray(lengths[closest] / longest, dtype=np.float32), longest
@@ -208,9 +214,7 @@ class ParticleSkin:
         counts = np.diff(offsets)
         self.roots = offsets[:-1]
         points = groom.positions_wo.astype(np.float64)
-        self.rest_lengths = np.zeros(len(points))
-        self.rest_lengths[1:] = np.linalg.norm(np.diff(points, axis=0), axis=1)
-        self.rest_lengths[self.roots] = 0.0  # no segment from one strand's tip to the next root
+        self.rest_lengths = segment_lengths(groom)
         arc = np.cumsum(self.rest_lengths)
         arc -= np.repeat(arc[self.roots], counts)
         strand_points = np.column_stack([np.repeat(points[self.roots], counts, axis=0), arc])
@@ -252,6 +256,8 @@ class ParticleSkin:
             for _ in range(0 if colliders is None else 2):  # swung out where it went inside
                 contacts = colliders.find_contacts(positions[layer])
                 inside = contacts["hit"] & (contacts["depth"] > 0.0)
+                if not inside.any():
+                    break
                 surface = contacts["surface_point"][inside] + 1e-4 * contacts["normal"][inside]
                 positions[layer[inside]] = toward(layer[inside], surface)
         return positions

@@ -9,13 +9,6 @@ namespace hairdyn {
 
 static constexpr int64_t grain = 1024;
 
-/* The particle at the other end of pair entry `code` (see LcpConnections::particle_pairs). */
-static inline int32_t partner(const LcpConnections &c, const int32_t code)
-{
-  const int32_t p = code >> 1;
-  return (code & 1) ? c.root[size_t(p)] : c.tip[size_t(p)];
-}
-
 double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3> r_product) const
 {
   const std::vector<int32_t> &offsets = connections_->particle_offsets;
@@ -111,15 +104,15 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
         const vec3 &axis = axis_[size_t(p)];
         /* x̂_ij points from i to its partner j. */
         const vec3 x_hat = (code & 1) ? -axis : axis;
-        const vec3 v_ij = r_velocities[partner(connections, code)] - v_i;
+        const int32_t j = connections.partner(code);
+        const vec3 v_ij = r_velocities[j] - v_i;
         const float ak = alpha_k[p], lateral = lateral_[size_t(p)];
         /* Damped spring (§3.3): elastic α k (r − l) x̂ and damping γ α k (v_ij · x̂) x̂. */
         force += (stretch_force_[size_t(p)] + damping_time * ak * glm::dot(v_ij, x_hat)) * x_hat;
         /* K (v_i − v_j) of this pair. */
         stiff_v -= ak * ((1.0f - lateral) * glm::dot(axis, v_ij) * axis + lateral * v_ij);
         diagonal += along_[size_t(p)] * glm::outerProduct(axis, axis) + mat3(across_[size_t(p)]);
-        entries_[size_t(k)] = {partner(connections, code), along_[size_t(p)], across_[size_t(p)],
-                               axis};
+        entries_[size_t(k)] = {j, along_[size_t(p)], across_[size_t(p)], axis};
       }
       rhs_[size_t(i)] = dt * (force - dt * stiff_v);
       inverse_diagonal_[size_t(i)] = glm::inverse(diagonal);

@@ -9,6 +9,7 @@
 #include "core/parallel.hh"
 #include "core/spatial_grid.hh"
 #include "groom/groom.hh"
+#include "lcp/interactions_bando2003.hh"
 
 namespace hairdyn {
 
@@ -360,7 +361,6 @@ LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Spa
   return particles;
 }
 
-
 int64_t separate_close_particles(const MutableSpan<vec3> positions, const Span<uint8_t> is_fixed,
                                  const float min_distance, const int iterations,
                                  const std::function<void(vec3 &)> &constrain)
@@ -372,13 +372,7 @@ int64_t separate_close_particles(const MutableSpan<vec3> positions, const Span<u
   const auto count_close = [&]() {
     grid.build(positions, min_distance);
     find_neighbors(grid, positions, 0.99f * min_distance, true, neighbors);
-    int64_t count = 0;
-    for (int64_t i = 0; i < n; i++) {
-      for (const int32_t j : neighbors.neighbors_of(i)) {
-        count += (j > i && !(is_fixed[i] && is_fixed[j])) ? 1 : 0;
-      }
-    }
-    return count;
+    return count_close_pairs(positions, is_fixed, neighbors, 0.99f * min_distance);
   };
   int64_t close_num = count_close();
   for (int iteration = 0; iteration < iterations && close_num > 0; iteration++) {

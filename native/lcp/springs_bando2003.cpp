@@ -238,13 +238,13 @@ void accumulate_spring_forces(const LcpConnections &connections, const Span<vec3
       for (int32_t k = connections.particle_offsets[size_t(i)];
            k < connections.particle_offsets[size_t(i) + 1]; k++)
       {
-        const int32_t p = connections.particle_pairs[size_t(k)] >> 1;
+        const int32_t code = connections.particle_pairs[size_t(k)];
+        const int32_t p = code >> 1;
         const float ak = alpha_k[p];
         if (ak <= 0.0f) {
           continue;
         }
-        const int32_t a = connections.root[size_t(p)], b = connections.tip[size_t(p)];
-        const int32_t j = (a == i) ? b : a;
+        const int32_t j = connections.partner(code);
         const vec3 x_ij = positions[j] - positions[i];
         const float dist = glm::length(x_ij);
         if (dist <= 0.0f) {
@@ -301,7 +301,7 @@ void update_directions(const LcpConnections &connections, const Span<vec3> posit
         const int32_t code = connections.particle_pairs[size_t(k)];
         const int32_t p = code >> 1;
         const bool i_is_tip = code & 1;
-        const int32_t j = i_is_tip ? connections.root[size_t(p)] : connections.tip[size_t(p)];
+        const int32_t j = connections.partner(code);
         const vec3 x_ij = positions[j] - positions[i];
         const float dist = glm::length(x_ij);
         if (dist <= 0.0f || alpha_k[p] <= 0.0f) {

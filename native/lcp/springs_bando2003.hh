@@ -23,6 +23,11 @@ struct LcpConnections {
   std::vector<int32_t> particle_pairs;
 
   int64_t size() const { return int64_t(root.size()); }
+  /* The particle at the other end of a `particle_pairs` entry. */
+  int32_t partner(const int32_t code) const
+  {
+    return (code & 1) ? root[size_t(code >> 1)] : tip[size_t(code >> 1)];
+  }
 };
 
 /* a_ij of eq. 6 from the rest directions and x_ij = x_j − x_i. */
