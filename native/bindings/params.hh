@@ -110,7 +110,7 @@ template<typename Params, typename T> T convert_param(T Params::*member, const p
 
 /* Registers `Params` as a Python class `name` with one checked attribute per field,
  * `Params(**fields)`, `to_dict()` and the static `fields()` table (name, symbol, unit, min,
- * max, default, description, choices). */
+ * max, default, description, choices, display_scale, display_unit, soft_min, soft_max, label). */
 template<typename Params> py::class_<Params> bind_params(py::module_ &m, const char *name,
                                                         const char *doc)
 {
@@ -168,6 +168,11 @@ template<typename Params> py::class_<Params> bind_params(py::module_ &m, const c
       row["default"] = defaults.attr(info.name);
       row["description"] = info.description;
       row["choices"] = info.choices;
+      row["display_scale"] = info.display_scale;
+      row["display_unit"] = info.display_unit;
+      row["soft_min"] = info.soft_min;
+      row["soft_max"] = info.soft_max;
+      row["label"] = info.label;
       table.append(row);
     });
     return table;

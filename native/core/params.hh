@@ -14,6 +14,8 @@
 
 namespace hairdyn {
 
+constexpr double unbounded = std::numeric_limits<double>::infinity();
+
 struct ParamInfo {
   const char *name;        /* Python / property name, snake_case. */
   const char *symbol;      /* The paper's symbol ("k_θ"), or "" when the paper has none. */
@@ -22,8 +24,37 @@ struct ParamInfo {
   double max;
   const char *description; /* One sentence for the tooltip, naming the paper's equation. */
   const char *choices = ""; /* For enums: "explicit,implicit". */
-};
+  /* What the add-on needs to show the field (the PropertyGroups are generated from this):
+   * the panel shows value × display_scale in display_unit ("µN·m/rad"), so hair-sized SI
+   * values read as ordinary numbers; the slider spans [soft_min, soft_max] (infinite: the
+   * hard range); label is the short panel label ("" : derived from the name). */
+  double display_scale = 1.0;
+  const char *display_unit = "";
+  double soft_min = -unbounded;
+  double soft_max = unbounded;
+  const char *label = "";
 
-constexpr double unbounded = std::numeric_limits<double>::infinity();
+  /* Chained in the struct's for_each_field: ParamInfo{...}.shown_as(1e6, "µN·m/rad").soft(0, 10). */
+  constexpr ParamInfo shown_as(const double scale, const char *unit_shown) const
+  {
+    ParamInfo info = *this;
+    info.display_scale = scale;
+    info.display_unit = unit_shown;
+    return info;
+  }
+  constexpr ParamInfo soft(const double lo, const double hi) const
+  {
+    ParamInfo info = *this;
+    info.soft_min = lo;
+    info.soft_max = hi;
+    return info;
+  }
+  constexpr ParamInfo labeled(const char *text) const
+  {
+    ParamInfo info = *this;
+    info.label = text;
+    return info;
+  }
+};
 
 }  // namespace hairdyn

@@ -1,0 +1,40 @@
+#pragma once
+/* The seam through which methods that act on the whole groom plug into strand dynamics
+ * (Petrovic 2006's volume, Ward & Lin 2003's swept spheres and level of detail; DESIGN.md:
+ * "all strands advance one substep, then grid and collision passes").
+ *
+ * Each substep the strand solver advances every strand, then runs its passes in order over
+ * the node state, then takes the corrected positions and velocities back into its own
+ * coordinates (segment lengths kept, roots carried by the head). A pass owns its scratch
+ * buffers and calls kernels that are free functions over spans; it must be deterministic for
+ * any thread count. */
+#include <cstdint>
+
+#include "core/math.hh"
+#include "core/span.hh"
+
+namespace hairdyn {
+
+struct SubstepState {
+  float h = 0.0f;    /* s, the substep's length */
+  float time = 0.0f; /* s, simulated time at its end */
+  Span<int32_t> curve_offsets;
+  /* World-space node positions (m) and velocities (m/s) at the end of the substep. A pass
+   * may change any node but the roots (the first point of each strand). */
+  MutableSpan<vec3> positions_wo;
+  MutableSpan<vec3> velocities_wo;
+  /* m, per point: the strand's radius (swept-sphere thickness); empty when unknown. */
+  Span<float> radii;
+  /* The head at the end of the substep (grids that move with the head use it). */
+  mat4 head_to_world{1.0f};
+};
+
+class SubstepPass {
+ public:
+  virtual ~SubstepPass() = default;
+  /* Report name ("volume", "hair_hair"): the solver times each pass under it. */
+  virtual const char *name() const = 0;
+  virtual void apply(const SubstepState &state) = 0;
+};
+
+}  // namespace hairdyn
