@@ -27,6 +27,15 @@ def pytest_report_header(config):
     return f"hairdyn host: {host_name()} (Blender {bpy.app.version_string})"
 
 
+def shown(struct_name, field_name, si_value):
+    """What the panel's property holds for an SI value of a native field: value × the field's
+    display_scale (native ParamInfo.shown_as), so tests hold whatever the panel's unit is."""
+    from hairdyn import native
+
+    fields = getattr(native.load(), struct_name).fields()
+    return si_value * next(f for f in fields if f["name"] == field_name)["display_scale"]
+
+
 @pytest.fixture(scope="session", autouse=True)
 def addon():
     if not hasattr(bpy.types.Object, "hairdyn"):

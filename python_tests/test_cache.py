@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from conftest import FIXTURES
-from hairdyn import bridge, playback, simulation
+from hairdyn import bake, bridge, playback
 from hairdyn.cache import Cache, CacheError
 
 
@@ -181,7 +181,7 @@ def test_unsaved_file_with_relative_cache_is_a_clear_error(empty_scene):
     empty_scene.collection.objects.link(hair)
     assert hair.hairdyn.cache_directory == "//hairdyn_cache/"
     with pytest.raises(HairdynError, match="Save the .blend file first"):
-        simulation.cache_directory(hair)
+        bake.cache_directory(hair)
     bpy.context.view_layer.objects.active = hair
     with pytest.raises(RuntimeError, match="Save the .blend file first"):
         bpy.ops.hairdyn.bake()
@@ -215,7 +215,7 @@ def test_strand_bake_plays_back_guides_and_children(saved_shake):
 
 def test_object_deleted_during_a_bake_keeps_the_frames(saved_shake):
     hair, tmp_path = saved_shake
-    runner = simulation.start_bake(bpy.context, hair)
+    runner = bake.start_bake(bpy.context, hair)
     for _ in range(5):
         runner.advance()
     bpy.data.objects.remove(hair)
@@ -224,7 +224,7 @@ def test_object_deleted_during_a_bake_keeps_the_frames(saved_shake):
     with pytest.raises(HairdynError, match="deleted during the simulation; the frames written "
                                            "before are kept"):
         runner.advance()
-    report = simulation.finish_bake(runner)
+    report = bake.finish_bake(runner)
     assert report["object"] == "Hair" and report["frames"] >= 5
     cache = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
     frames = cache.frames()  # every frame simulated before the failure, complete
