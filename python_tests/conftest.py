@@ -2,6 +2,7 @@
 
 Every test that needs a scene opens a fixture from blend_fixtures/ fresh.
 """
+
 import os
 import sys
 from pathlib import Path

@@ -2,6 +2,7 @@
 through the bake, playback and the command line; a Strands extension (a substep pass with its
 own settings group) plugs in the same way. The error boundary: an unexpected exception in a
 method cancels the operator with a report and prints its traceback once in playback."""
+
 import shutil
 
 import bpy
@@ -35,11 +36,17 @@ class Rising(methods.Method):
         return self.rest + np.float32(0.001 * self.frames) * np.array([0, 0, 1], np.float32)
 
     def streams(self):
-        return {"tips": methods.Stream(
-            {"position": 3, "height": 1},
-            lambda: {"position": self.positions[self.tips],
-                     "height": self.positions[self.tips, 2]},
-            len(self.tips), outputs=("output_points",))}
+        return {
+            "tips": methods.Stream(
+                {"position": 3, "height": 1},
+                lambda: {
+                    "position": self.positions[self.tips],
+                    "height": self.positions[self.tips, 2],
+                },
+                len(self.tips),
+                outputs=("output_points",),
+            )
+        }
 
     def report(self):
         return {"rising_frames": self.frames}
@@ -92,8 +99,9 @@ def test_a_registered_method_bakes_and_plays_back(registered, shake):
     assert np.allclose(cache.read_frame(5)["position"][:, 2] - rest[:, 2], 0.004, atol=1e-6)
     bpy.context.scene.frame_set(4)
     assert playback.last_error(hair) is None
-    assert np.array_equal(output_positions(hair.hairdyn.output_curves),
-                          cache.read_frame(4)["position"])
+    assert np.array_equal(
+        output_positions(hair.hairdyn.output_curves), cache.read_frame(4)["position"]
+    )
     points = hair.hairdyn.output_points.data  # the tips stream took the point output
     assert len(points.vertices) == hair.data.curves.__len__()
     height = np.empty(len(points.vertices), np.float32)
@@ -103,9 +111,24 @@ def test_a_registered_method_bakes_and_plays_back(registered, shake):
 
 def test_a_registered_method_runs_from_the_command_line(registered, tmp_path):
     report_path = tmp_path / "report.json"
-    code = cli.main(["--blend", str(FIXTURES / "head_shake.blend"), "bake", "--object", "Hair",
-                     "--frames", "1", "3", "--set", "method=rising", "--cache",
-                     str(tmp_path / "cache"), "--report", str(report_path)])
+    code = cli.main(
+        [
+            "--blend",
+            str(FIXTURES / "head_shake.blend"),
+            "bake",
+            "--object",
+            "Hair",
+            "--frames",
+            "1",
+            "3",
+            "--set",
+            "method=rising",
+            "--cache",
+            str(tmp_path / "cache"),
+            "--report",
+            str(report_path),
+        ]
+    )
     assert code == 0
     import json
 
@@ -115,12 +138,23 @@ def test_a_registered_method_runs_from_the_command_line(registered, tmp_path):
 
 
 def test_an_internal_error_in_the_command_line_exits_1(registered, tmp_path, capsys):
-    code = cli.main(["--blend", str(FIXTURES / "head_shake.blend"), "run", "--object", "Hair",
-                     "--frames", "1", "5", "--set", "method=failing"])
+    code = cli.main(
+        [
+            "--blend",
+            str(FIXTURES / "head_shake.blend"),
+            "run",
+            "--object",
+            "Hair",
+            "--frames",
+            "1",
+            "5",
+            "--set",
+            "method=failing",
+        ]
+    )
     assert code == 1
     err = capsys.readouterr().err
-    assert "hairdyn: error: Internal error in hairdyn (ZeroDivisionError: a bug in a method)" \
-        in err
+    assert "hairdyn: error: Internal error in hairdyn (ZeroDivisionError: a bug in a method)" in err
     assert err.count("Traceback") == 1
 
 
@@ -158,13 +192,18 @@ def test_a_strands_extension_adds_its_settings_and_pass(shake, monkeypatch):
         strength: bpy.props.FloatProperty(name="Strength", default=0.5)
 
     attached = []
-    extension = Extension("test_pass", lambda solver, build: attached.append(
-        (solver, build.settings.test_pass.strength)),
+    extension = Extension(
+        "test_pass",
+        lambda solver, build: attached.append((solver, build.settings.test_pass.strength)),
         options={"test_pass": HairdynTestPassOptions},
-        sections=(methods.Section("Test Pass", "test_pass", ("strength",)),))
+        sections=(methods.Section("Test Pass", "test_pass", ("strength",)),),
+    )
     for name in ("extensions", "params", "options", "sections"):
-        monkeypatch.setattr(Strands, name, list(getattr(Strands, name)) if name == "extensions"
-                            else getattr(Strands, name))
+        monkeypatch.setattr(
+            Strands,
+            name,
+            list(getattr(Strands, name)) if name == "extensions" else getattr(Strands, name),
+        )
     from hairdyn.methods import strands
 
     strands.register_extension(extension)

@@ -1,6 +1,7 @@
 """Parameters are declared once, in the native structs: the add-on's PropertyGroups are
 generated from `_native.<X>Params.fields()` and must match them field by field; the scene
 provides gravity; a cache manifest's parameters round-trip."""
+
 import json
 import math
 
@@ -15,8 +16,10 @@ STRUCTS = sorted(parameters.native_structs(native.load()))
 def settings_group(settings, struct_name):
     """The settings group generated from a native struct."""
     for prop in settings.bl_rna.properties:
-        if prop.type == 'POINTER' and prop.fixed_type.identifier == \
-                parameters.CLASS_PREFIX + struct_name:
+        if (
+            prop.type == 'POINTER'
+            and prop.fixed_type.identifier == parameters.CLASS_PREFIX + struct_name
+        ):
             return getattr(settings, prop.identifier)
     raise AssertionError(f"no settings group for {struct_name}")
 
@@ -35,15 +38,19 @@ def test_generated_group_matches_the_native_struct(struct_name, empty_scene):
     Fields the scene provides (gravity) have no property."""
     hair = bpy.data.objects.new("Hair", bpy.data.hair_curves.new("Hair"))
     group = settings_group(hair.hairdyn, struct_name)
-    rna = {p.identifier: p for p in group.bl_rna.properties
-           if p.identifier not in ("rna_type", "name")}
+    rna = {
+        p.identifier: p for p in group.bl_rna.properties if p.identifier not in ("rna_type", "name")
+    }
     fields = getattr(native.load(), struct_name).fields()
     assert list(rna) == [f["name"] for f in fields if f["name"] not in parameters.SCENE_FIELDS]
     for field in fields:
         if field["name"] in parameters.SCENE_FIELDS:
             continue
-        prop, where, scale = rna[field["name"]], f"{struct_name}.{field['name']}", \
-            field["display_scale"]
+        prop, where, scale = (
+            rna[field["name"]],
+            f"{struct_name}.{field['name']}",
+            field["display_scale"],
+        )
         assert field["description"] in prop.description, where
         for part in (field["symbol"], field["display_unit"] or field["unit"]):
             assert part in prop.description, where
@@ -63,17 +70,24 @@ def test_generated_group_matches_the_native_struct(struct_name, empty_scene):
             continue
         if isinstance(field["default"], (tuple, list)):
             assert list(prop.default_array) == pytest.approx(
-                [v * scale for v in field["default"]], rel=1e-6), where
+                [v * scale for v in field["default"]], rel=1e-6
+            ), where
         else:
             assert prop.type == ('INT' if isinstance(field["default"], int) else 'FLOAT'), where
             assert prop.default == pytest.approx(field["default"] * scale, rel=1e-6), where
-        for key, rna_key in (("min", "hard_min"), ("max", "hard_max"), ("soft_min", "soft_min"),
-                             ("soft_max", "soft_max")):
-            expected = field[key] if math.isfinite(field[key]) else \
-                field[key.replace("soft_", "")]  # no soft range: the hard one
+        for key, rna_key in (
+            ("min", "hard_min"),
+            ("max", "hard_max"),
+            ("soft_min", "soft_min"),
+            ("soft_max", "soft_max"),
+        ):
+            expected = (
+                field[key] if math.isfinite(field[key]) else field[key.replace("soft_", "")]
+            )  # no soft range: the hard one
             if math.isfinite(expected):
-                assert getattr(prop, rna_key) == pytest.approx(expected * scale, rel=1e-6), \
+                assert getattr(prop, rna_key) == pytest.approx(expected * scale, rel=1e-6), (
                     f"{where} {key}"
+                )
 
 
 @pytest.mark.parametrize("struct_name", STRUCTS)
@@ -97,8 +111,10 @@ def test_native_params_from_settings(struct_name, open_fixture):
         assert getattr(params, field["name"]) == len(field["choices"].split(",")) - 1
 
 
-@pytest.mark.parametrize("struct_name", [s for s in STRUCTS if any(
-    f["name"] == "gravity" for f in getattr(native.load(), s).fields())])
+@pytest.mark.parametrize(
+    "struct_name",
+    [s for s in STRUCTS if any(f["name"] == "gravity" for f in getattr(native.load(), s).fields())],
+)
 def test_gravity_comes_from_the_scene(struct_name, empty_scene):
     params_class = getattr(native.load(), struct_name)
     hair = bpy.data.objects.new("Hair", bpy.data.hair_curves.new("Hair"))
@@ -127,8 +143,9 @@ def test_manifest_parameters_round_trip(open_fixture, tmp_path):
     for struct_name in STRUCTS:
         group = settings_group(settings, struct_name)
         attribute = group.path_from_id().split(".")[-1]
-        assert set(values[attribute]) == {f["name"] for f in parameters.shown_fields(
-            getattr(native.load(), struct_name))}
+        assert set(values[attribute]) == {
+            f["name"] for f in parameters.shown_fields(getattr(native.load(), struct_name))
+        }
     assert values["lcp"]["h2"] == pytest.approx(0.02)
     assert values["lcp_init"]["length_source"] == 'WEIGHTS'
     runner = bake.start_bake(bpy.context, hair)

@@ -2,6 +2,7 @@
 manifest, a frame that is a directory, values that are not finite each give a message in the
 panel and on the console, and nothing of it reaches the scene. A renamed hair object keeps its
 bake and its live simulation."""
+
 import shutil
 
 import bpy
@@ -26,8 +27,9 @@ def baked(tmp_path):
 
 
 def shown(hair):
-    return bridge.read_curves(hair.hairdyn.output_curves,
-                              bpy.context.evaluated_depsgraph_get()).positions_wo
+    return bridge.read_curves(
+        hair.hairdyn.output_curves, bpy.context.evaluated_depsgraph_get()
+    ).positions_wo
 
 
 def test_renamed_object_keeps_its_bake_and_its_live_simulation(baked):

@@ -19,10 +19,30 @@ bl_info = {
 }
 
 # Every module, dependencies first: a reload (F8, or the add-on re-enabled) reloads them all.
-_MODULES = ("errors", "native", "cache", "hair_formats", "parameters", "bridge", "billboards",
-            "colliders", "methods.base", "methods.follow", "methods.strands", "methods.lcp",
-            "methods", "properties", "outputs", "simulation", "bake", "playback", "operators",
-            "io_import", "presets", "ui")
+_MODULES = (
+    "errors",
+    "native",
+    "cache",
+    "hair_formats",
+    "parameters",
+    "bridge",
+    "billboards",
+    "colliders",
+    "methods.base",
+    "methods.follow",
+    "methods.strands",
+    "methods.lcp",
+    "methods",
+    "properties",
+    "outputs",
+    "simulation",
+    "bake",
+    "playback",
+    "operators",
+    "io_import",
+    "presets",
+    "ui",
+)
 
 if "bpy" in locals():
     import importlib
@@ -35,9 +55,26 @@ if "bpy" in locals():
 
 import bpy  # noqa: E402
 
-from . import (bake, billboards, bridge, cache, colliders, errors, hair_formats,  # noqa: E402,F401
-               io_import, methods, native, operators, outputs, parameters, playback, presets,
-               properties, simulation, ui)
+from . import (  # noqa: E402, F401 - every module, for the reload above
+    bake,
+    billboards,
+    bridge,
+    cache,
+    colliders,
+    errors,
+    hair_formats,
+    io_import,
+    methods,
+    native,
+    operators,
+    outputs,
+    parameters,
+    playback,
+    presets,
+    properties,
+    simulation,
+    ui,
+)
 
 classes = (
     operators.HAIRDYN_OT_simulate,

@@ -2,6 +2,7 @@
 baked, so a renamed object keeps it), starting a bake or resuming one into a Cache, and
 finishing it (its report in the manifest). The frames are simulated by simulation.Runner.
 """
+
 from pathlib import Path
 
 import bpy
@@ -24,8 +25,9 @@ def cache_directory(hair_obj):
     if not base:
         raise HairdynError("Set a cache folder in the hairdyn panel")
     if base.startswith("//") and not bpy.data.filepath:
-        raise HairdynError(f"Save the .blend file first: the cache folder '{base}' is relative "
-                           "to it")
+        raise HairdynError(
+            f"Save the .blend file first: the cache folder '{base}' is relative to it"
+        )
     return Path(bpy.path.abspath(base)) / folder_name(hair_obj)
 
 
@@ -34,8 +36,11 @@ def _claim_folder(hair_obj):
     another object) gets one of its own rather than overwriting the original's bake."""
     settings = hair_obj.hairdyn
     shared = settings.bake_folder and any(
-        other is not hair_obj and other.hairdyn.bake_folder == settings.bake_folder and
-        other.hairdyn.cache_directory == settings.cache_directory for other in bpy.data.objects)
+        other is not hair_obj
+        and other.hairdyn.bake_folder == settings.bake_folder
+        and other.hairdyn.cache_directory == settings.cache_directory
+        for other in bpy.data.objects
+    )
     if not settings.bake_folder or shared:
         settings.bake_folder = bpy.path.clean_name(hair_obj.name)
 
@@ -63,8 +68,10 @@ def start_bake(context, hair_obj, resume_after=None):
     if resume_after is not None:
         cache = Cache.open(directory)
         if cache.manifest["parameters"] != baked_with:
-            raise HairdynError("The parameters changed since this bake started: bake from the "
-                               "start, or restore them")
+            raise HairdynError(
+                "The parameters changed since this bake started: bake from the "
+                "start, or restore them"
+            )
         last = cache.last_contiguous_frame()
         if last is None or last < cache.manifest["frame_start"]:
             raise HairdynError(f"There is no baked frame to continue from in '{directory}'")
@@ -74,18 +81,32 @@ def start_bake(context, hair_obj, resume_after=None):
         for frame in cache.frames():
             if frame > last:
                 cache.frame_path(frame).unlink()
-        return Runner(context, hair_obj, cache.manifest["frame_start"],
-                      cache.manifest["frame_end"], cache=cache, resume_from=last)
+        return Runner(
+            context,
+            hair_obj,
+            cache.manifest["frame_start"],
+            cache.manifest["frame_end"],
+            cache=cache,
+            resume_from=last,
+        )
     runner = Runner(context, hair_obj, settings.frame_start, settings.frame_end)
     streams = runner.simulation.streams()
     strands = streams.pop(STRANDS)
     runner.cache = Cache.create(
-        directory, solver=runner.simulation.method.identifier.lower(), parameters=baked_with,
-        curve_offsets=strands.offsets, columns=strands.columns,
-        frame_start=settings.frame_start, frame_end=settings.frame_end, fps=1.0 / runner.dt,
+        directory,
+        solver=runner.simulation.method.identifier.lower(),
+        parameters=baked_with,
+        curve_offsets=strands.offsets,
+        columns=strands.columns,
+        frame_start=settings.frame_start,
+        frame_end=settings.frame_end,
+        fps=1.0 / runner.dt,
         streams={name: stream.layout() for name, stream in streams.items()},
-        extra={"object": hair_obj.name,
-               "outputs": {name: stream.output() for name, stream in streams.items()}})
+        extra={
+            "object": hair_obj.name,
+            "outputs": {name: stream.output() for name, stream in streams.items()},
+        },
+    )
     return runner
 
 
@@ -95,7 +116,10 @@ def finish_bake(runner):
     manifest = runner.cache.manifest
     manifest["complete"] = runner.cache.last_contiguous_frame() == manifest["frame_end"]
     manifest["report"] = report
-    manifest["timings"] = {"ms_per_frame": report["ms_per_frame"], "total_s": report["total_s"],
-                           "frames": report["frames"]}
+    manifest["timings"] = {
+        "ms_per_frame": report["ms_per_frame"],
+        "total_s": report["total_s"],
+        "frames": report["frames"],
+    }
     runner.cache.save_manifest()
     return report

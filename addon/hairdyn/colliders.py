@@ -7,6 +7,7 @@ the panel's list (or with --set colliders=A,B). Each collider becomes one native
 whose parts are its vertex groups named in `collider_parts` (head, neck, torso...). Rigid
 motion only updates the collider's transform; a deforming collider is rebuilt each frame.
 """
+
 import time
 
 import numpy as np
@@ -39,8 +40,14 @@ def collider_objects(hair_obj, head, scene):
     if settings.use_default_colliders:
         if head is not None:
             found.append(head)
-        found += sorted((o for o in scene.objects if o.type == 'MESH' and
-                         any(m.type == 'COLLISION' for m in o.modifiers)), key=lambda o: o.name)
+        found += sorted(
+            (
+                o
+                for o in scene.objects
+                if o.type == 'MESH' and any(m.type == 'COLLISION' for m in o.modifiers)
+            ),
+            key=lambda o: o.name,
+        )
     found += [item.object for item in settings.colliders if item.object is not None]
     unique = []
     for obj in found:
@@ -73,8 +80,9 @@ class Colliders:
     def __init__(self, hair_obj, head, scene, depsgraph):
         self.native = native.load()
         settings = hair_obj.hairdyn
-        self.params = parameters.native_params(settings.collision, self.native.CollisionParams,
-                                                scene)
+        self.params = parameters.native_params(
+            settings.collision, self.native.CollisionParams, scene
+        )
         self.objects = collider_objects(hair_obj, head, scene)
         self.names = [obj.name for obj in self.objects]
         self.colliders = []
@@ -105,9 +113,11 @@ class Colliders:
                 continue
             mesh = bridge.read_mesh(obj, depsgraph)
             if len(mesh.vertices) != len(self.vertices[index]):
-                raise HairdynError(f"Collider '{obj.name}' changed its vertex count during the "
-                                   "simulation; hairdyn follows deforming colliders of fixed "
-                                   "topology")
+                raise HairdynError(
+                    f"Collider '{obj.name}' changed its vertex count during the "
+                    "simulation; hairdyn follows deforming colliders of fixed "
+                    "topology"
+                )
             if not np.array_equal(mesh.vertices, self.vertices[index]):
                 collider.rebuild(mesh.vertices)
                 rebuild_ms += collider.build_ms

@@ -5,6 +5,7 @@ A HairdynError is something the user can fix; its message is a sentence meant fo
 and is shown as it is (a Blender report, one console line). Anything else is an internal error:
 its traceback is printed once on the console and the user sees one line saying so.
 """
+
 import traceback
 
 
@@ -16,8 +17,10 @@ def message(error):
     """The one line a user sees for any exception."""
     if isinstance(error, HairdynError):
         return str(error)
-    return (f"Internal error in hairdyn ({type(error).__name__}: {error}); the traceback is on "
-            "the console, please report it")
+    return (
+        f"Internal error in hairdyn ({type(error).__name__}: {error}); the traceback is on "
+        "the console, please report it"
+    )
 
 
 def is_internal(error):

@@ -2,6 +2,7 @@
 report through the one error boundary (errors.operator_boundary): a user error is an ERROR
 report, anything else an internal-error report with its traceback on the console; a bake that
 fails still records the frames it wrote in its manifest."""
+
 import bpy
 from bpy.props import BoolProperty
 
@@ -35,13 +36,20 @@ class HAIRDYN_OT_simulate(bpy.types.Operator):
         window_manager = context.window_manager
         window_manager.progress_begin(settings.frame_start, settings.frame_end)
         try:
-            report = simulation.run(context, obj, settings.frame_start, settings.frame_end,
-                                    on_frame=lambda f, _ms: window_manager.progress_update(f))
+            report = simulation.run(
+                context,
+                obj,
+                settings.frame_start,
+                settings.frame_end,
+                on_frame=lambda f, _ms: window_manager.progress_update(f),
+            )
         finally:
             window_manager.progress_end()
             scene.frame_set(frame)
-        self.report({'INFO'}, f"hairdyn: {report['frames']} frames, "
-                              f"{report['ms_per_frame']:.2f} ms per frame")
+        self.report(
+            {'INFO'},
+            f"hairdyn: {report['frames']} frames, {report['ms_per_frame']:.2f} ms per frame",
+        )
         return {'FINISHED'}
 
 
@@ -53,9 +61,11 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
     bl_options = {'REGISTER'}
 
     from_current: BoolProperty(
-        name="From Current Frame", default=False,
+        name="From Current Frame",
+        default=False,
         description="Keep the baked frames before the current frame and bake on from there "
-                    "(resumes a bake that stopped)")
+        "(resumes a bake that stopped)",
+    )
 
     _runner = None
     _timer = None
@@ -79,8 +89,10 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
         context.scene.frame_set(self._frame)
         baked = len(runner.cache.frames())
         verb = "Stopped" if cancelled else "Baked"
-        self.report({'WARNING' if cancelled else 'INFO'},
-                    f"{verb}: {baked} frames in the cache, {report['ms_per_frame']:.2f} ms per frame")
+        self.report(
+            {'WARNING' if cancelled else 'INFO'},
+            f"{verb}: {baked} frames in the cache, {report['ms_per_frame']:.2f} ms per frame",
+        )
         return report
 
     def cleanup(self, context):
@@ -129,7 +141,8 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
         context.window_manager.progress_update(frame)
         if context.workspace is not None:
             context.workspace.status_text_set(
-                f"hairdyn: baking frame {frame} of {runner.frame_end} ({ms:.1f} ms) - Esc stops")
+                f"hairdyn: baking frame {frame} of {runner.frame_end} ({ms:.1f} ms) - Esc stops"
+            )
         if runner.done:
             self._end_modal(context)
             self._finish(context, cancelled=False)

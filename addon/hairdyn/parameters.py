@@ -8,6 +8,7 @@ parameter is declared once and the panel and the solver cannot drift apart. The 
 value × display_scale in display_unit. Fields the scene provides (SCENE_FIELDS: gravity, from
 Blender's scene gravity) get no property; `scene_values()` fills them.
 """
+
 import math
 
 import bpy
@@ -30,7 +31,7 @@ def native_structs(module):
 
 def struct_name(group):
     """The native struct a generated PropertyGroup (class or instance) mirrors."""
-    return group.bl_rna.identifier[len(CLASS_PREFIX):]
+    return group.bl_rna.identifier[len(CLASS_PREFIX) :]
 
 
 def shown_fields(params_class):
@@ -72,28 +73,50 @@ def _property(field):
         return EnumProperty(items=items, default=choices[default].upper(), **common)
     if isinstance(default, bool):
         return BoolProperty(default=default, **common)
-    ranges = {key: value for key, value in (
-        ("min", _finite(field["min"], scale)), ("max", _finite(field["max"], scale)),
-        ("soft_min", _finite(field["soft_min"], scale)),
-        ("soft_max", _finite(field["soft_max"], scale))) if value is not None}
+    ranges = {
+        key: value
+        for key, value in (
+            ("min", _finite(field["min"], scale)),
+            ("max", _finite(field["max"], scale)),
+            ("soft_min", _finite(field["soft_min"], scale)),
+            ("soft_max", _finite(field["soft_max"], scale)),
+        )
+        if value is not None
+    }
     if isinstance(default, int):
         return IntProperty(default=default, **{k: int(v) for k, v in ranges.items()}, **common)
     if isinstance(default, (tuple, list)):
         shown = tuple(v * scale for v in default)
-        return FloatVectorProperty(default=shown, size=len(shown), subtype='XYZ',
-                                   precision=_precision(max(map(abs, shown))), **ranges, **common)
+        return FloatVectorProperty(
+            default=shown,
+            size=len(shown),
+            subtype='XYZ',
+            precision=_precision(max(map(abs, shown))),
+            **ranges,
+            **common,
+        )
     subtype = _SUBTYPES.get(field["unit"], 'NONE') if scale == 1.0 else 'NONE'
-    return FloatProperty(default=default * scale, precision=_precision(default * scale),
-                         subtype=subtype, **ranges, **common)
+    return FloatProperty(
+        default=default * scale,
+        precision=_precision(default * scale),
+        subtype=subtype,
+        **ranges,
+        **common,
+    )
 
 
 def property_group(params_class):
     """A new PropertyGroup class (not registered) with one property per shown field."""
     name = CLASS_PREFIX + params_class.__name__
     annotations = {field["name"]: _property(field) for field in shown_fields(params_class)}
-    return type(name, (bpy.types.PropertyGroup,), {
-        "__annotations__": annotations,
-        "__doc__": f"Generated from the native {params_class.__name__}.fields()"})
+    return type(
+        name,
+        (bpy.types.PropertyGroup,),
+        {
+            "__annotations__": annotations,
+            "__doc__": f"Generated from the native {params_class.__name__}.fields()",
+        },
+    )
 
 
 def scene_values(params_class, scene):
@@ -104,8 +127,9 @@ def scene_values(params_class, scene):
     values = {}
     for field in params_class.fields():
         if field["name"] == "gravity":
-            values["gravity"] = gravity if isinstance(field["default"], (tuple, list)) \
-                else -gravity[2]
+            values["gravity"] = (
+                gravity if isinstance(field["default"], (tuple, list)) else -gravity[2]
+            )
     return values
 
 

@@ -10,6 +10,7 @@ of it reaches the scene. State is keyed by the object's stable identity (setting
 renamed object keeps its live simulation; its bake folder is the one recorded at bake time.
 It survives saving and reopening the file; caches are re-read when their manifest changes.
 """
+
 import uuid
 
 import bpy
@@ -21,8 +22,10 @@ from .cache import MAIN, Cache, CacheError
 from .errors import HairdynError, Once
 
 # A bake made before the manifest recorded its streams' outputs.
-_LEGACY_OUTPUTS = {"children": {"outputs": ["output_children"], "billboards": False},
-                   "particles": {"outputs": ["output_points"], "billboards": True}}
+_LEGACY_OUTPUTS = {
+    "children": {"outputs": ["output_children"], "billboards": False},
+    "particles": {"outputs": ["output_points"], "billboards": True},
+}
 
 _open_caches = {}  # cache directory -> (manifest stat key, Cache, curve_offsets, stream offsets)
 _verified = {}  # (object uid, cache directory) -> manifest stat key whose topology matched
@@ -65,15 +68,20 @@ def open_cache(directory):
     except OSError:
         _open_caches.pop(str(directory), None)
         if directory.is_dir() and any(directory.glob(f"{MAIN}_*.npy")):
-            raise CacheError(f"The bake in '{directory}' has frames but no manifest.json: "
-                             "bake again, or free the bake") from None
+            raise CacheError(
+                f"The bake in '{directory}' has frames but no manifest.json: "
+                "bake again, or free the bake"
+            ) from None
         return None
     known = _open_caches.get(str(directory))
     if known is None or known[0] != key:
         cache = Cache.open(directory)
-        offsets = {name: cache.stream_offsets(name) if
-                   cache.manifest["streams"][name].get("has_offsets") else None
-                   for name in cache.streams}
+        offsets = {
+            name: cache.stream_offsets(name)
+            if cache.manifest["streams"][name].get("has_offsets")
+            else None
+            for name in cache.streams
+        }
         known = (key, cache, cache.curve_offsets(), offsets)
         _open_caches[str(directory)] = known
     return known[1:]
@@ -97,8 +105,10 @@ def _read_checked(cache, name, frame):
     arrays = cache.read_frame(frame) if name == MAIN else cache.read_stream(name, frame)
     bad = sorted(key for key, values in arrays.items() if not np.isfinite(values).all())
     if bad:
-        raise CacheError(f"The baked frame '{path}' has values that are not finite numbers in "
-                         f"{', '.join(bad)}: bake again")
+        raise CacheError(
+            f"The baked frame '{path}' has values that are not finite numbers in "
+            f"{', '.join(bad)}: bake again"
+        )
     return arrays
 
 
@@ -118,11 +128,15 @@ def load_frame(obj, frame, depsgraph=None):
         return False
     _check_topology(obj, directory, cache, depsgraph)
     recorded = cache.manifest.get("outputs", _LEGACY_OUTPUTS)
-    shown = {outputs.STRANDS: (_read_checked(cache, MAIN, frame), curve_offsets,
-                               outputs.STRAND_OUTPUT)}
+    shown = {
+        outputs.STRANDS: (_read_checked(cache, MAIN, frame), curve_offsets, outputs.STRAND_OUTPUT)
+    }
     for name in cache.streams:
-        shown[name] = (_read_checked(cache, name, frame), stream_offsets[name],
-                       recorded.get(name, {"outputs": [], "billboards": False}))
+        shown[name] = (
+            _read_checked(cache, name, frame),
+            stream_offsets[name],
+            recorded.get(name, {"outputs": [], "billboards": False}),
+        )
     outputs.write(obj, shown)
     return True
 
@@ -168,8 +182,9 @@ def on_frame_change(scene, depsgraph=None):
         key = identity(obj)
         try:
             with simulation.moving_frames():  # reading hair may evaluate the scene: no re-entry
-                shown = (settings.use_cache and load_frame(obj, scene.frame_current, depsgraph)) \
-                    or (settings.use_live and live_step(obj, scene, depsgraph))
+                shown = (
+                    settings.use_cache and load_frame(obj, scene.frame_current, depsgraph)
+                ) or (settings.use_live and live_step(obj, scene, depsgraph))
             if shown:  # an error stays in the panel until a frame shows again
                 _errors.clear(key)
         except Exception as error:  # noqa: BLE001 - the handler's error boundary
@@ -192,8 +207,10 @@ def register():
 
 
 def unregister():
-    for handlers, handler in ((bpy.app.handlers.frame_change_post, on_frame_change),
-                              (bpy.app.handlers.load_post, on_load)):
+    for handlers, handler in (
+        (bpy.app.handlers.frame_change_post, on_frame_change),
+        (bpy.app.handlers.load_post, on_load),
+    ):
         while handler in handlers:
             handlers.remove(handler)
     forget()

@@ -1,6 +1,7 @@
 """Owns: presets with Blender's preset system: the papers' settings ship with the add-on, and
 artists save their own (the + button next to the preset menu). What a preset stores is every
 plain value of every settings group (properties.preset_paths), read at registration."""
+
 import shutil
 from pathlib import Path
 

@@ -6,11 +6,18 @@ generated from each native `<X>Params` struct (parameters.py; its attribute is t
 method adapter gives it in `Method.params`, else the struct's name in snake case) and each
 method's add-on-only options (`Method.options`). The Method enum comes from the registry.
 """
+
 import re
 
 import bpy
-from bpy.props import (BoolProperty, CollectionProperty, EnumProperty, IntProperty,
-                       PointerProperty, StringProperty)
+from bpy.props import (
+    BoolProperty,
+    CollectionProperty,
+    EnumProperty,
+    IntProperty,
+    PointerProperty,
+    StringProperty,
+)
 
 from . import methods, native, parameters
 
@@ -24,80 +31,125 @@ def _is_mesh(_self, obj):
 
 
 class HairdynColliderItem(bpy.types.PropertyGroup):
-    object: PointerProperty(name="Collider", type=bpy.types.Object, poll=_is_mesh,
-                            description="A mesh the hair collides with")
+    object: PointerProperty(
+        name="Collider",
+        type=bpy.types.Object,
+        poll=_is_mesh,
+        description="A mesh the hair collides with",
+    )
 
 
 class HairdynSettings(bpy.types.PropertyGroup):
     enabled: BoolProperty(
-        name="hairdyn", default=False,
+        name="hairdyn",
+        default=False,
         description="Simulate this hair with hairdyn: play back its bake, or simulate it live, "
-                    "whenever the frame changes")
+        "whenever the frame changes",
+    )
     head: PointerProperty(
-        name="Head", type=bpy.types.Object, poll=_is_mesh,
+        name="Head",
+        type=bpy.types.Object,
+        poll=_is_mesh,
         description="Mesh the hair roots are attached to. Empty: the Curves object's surface, "
-                    "or the mesh that emits the particle hair")
+        "or the mesh that emits the particle hair",
+    )
     use_billboards: BoolProperty(
-        name="Billboards", default=True,
+        name="Billboards",
+        default=True,
         description="Show LCP particles as hair-textured cards along the hair direction, "
-                    "faded by 1/sin θ (Bando 2003 §4), in the viewport and in Cycles")
+        "faded by 1/sin θ (Bando 2003 §4), in the viewport and in Cycles",
+    )
     output_children: PointerProperty(
-        name="Output Children", type=bpy.types.Object,
-        description="Curves object that receives the child hairs every frame (created when "
-                    "empty)")
+        name="Output Children",
+        type=bpy.types.Object,
+        description="Curves object that receives the child hairs every frame (created when empty)",
+    )
     use_collision: BoolProperty(
-        name="Collision", default=True,
+        name="Collision",
+        default=True,
         description="Collide the hair with the head and the other colliders (cylindrical and "
-                    "spherical maps, Kurihara 1993 §3)")
+        "spherical maps, Kurihara 1993 §3)",
+    )
     use_default_colliders: BoolProperty(
-        name="Default Colliders", default=True,
+        name="Default Colliders",
+        default=True,
         description="Collide with the head, and with every mesh that has Blender's Collision "
-                    "modifier")
-    colliders: CollectionProperty(type=HairdynColliderItem, name="Colliders",
-                                  description="More meshes the hair collides with")
+        "modifier",
+    )
+    colliders: CollectionProperty(
+        type=HairdynColliderItem, name="Colliders", description="More meshes the hair collides with"
+    )
     collider_index: IntProperty(name="Active Collider", default=0, min=0)
     collider_parts: StringProperty(
-        name="Parts", default="head,neck,torso,arms,arm.L,arm.R",
+        name="Parts",
+        default="head,neck,torso,arms,arm.L,arm.R",
         description="Vertex groups that get a map of their own (comma separated): head, neck, "
-                    "torso... A collider with none of them is one part")
+        "torso... A collider with none of them is one part",
+    )
     frame_start: IntProperty(
-        name="Start", default=1, min=-1048574, max=1048574,
-        description="First frame of the simulation: the groom's rest shape is read here")
+        name="Start",
+        default=1,
+        min=-1048574,
+        max=1048574,
+        description="First frame of the simulation: the groom's rest shape is read here",
+    )
     frame_end: IntProperty(
-        name="End", default=250, min=-1048574, max=1048574,
-        description="Last frame of the simulation")
+        name="End",
+        default=250,
+        min=-1048574,
+        max=1048574,
+        description="Last frame of the simulation",
+    )
     output_curves: PointerProperty(
-        name="Output Curves", type=bpy.types.Object,
+        name="Output Curves",
+        type=bpy.types.Object,
         description="Curves object that receives the simulated strands every frame "
-                    "(created when empty)")
+        "(created when empty)",
+    )
     output_points: PointerProperty(
-        name="Output Points", type=bpy.types.Object,
+        name="Output Points",
+        type=bpy.types.Object,
         description="Mesh of loose vertices that receives the simulated points and their "
-                    "attributes every frame (created when empty)")
+        "attributes every frame (created when empty)",
+    )
     cache_directory: StringProperty(
-        name="Cache", subtype='DIR_PATH', default="//hairdyn_cache/",
+        name="Cache",
+        subtype='DIR_PATH',
+        default="//hairdyn_cache/",
         description="Folder the bake writes to; // is relative to the .blend file. Each hair "
-                    "object bakes into a subfolder named after it when it is first baked")
+        "object bakes into a subfolder named after it when it is first baked",
+    )
     use_cache: BoolProperty(
-        name="Play Back Bake", default=True,
-        description="Load the baked frame into the output objects whenever the frame changes")
+        name="Play Back Bake",
+        default=True,
+        description="Load the baked frame into the output objects whenever the frame changes",
+    )
     use_live: BoolProperty(
-        name="Simulate on Playback", default=True,
+        name="Simulate on Playback",
+        default=True,
         description="Where no frame is baked, simulate while the animation plays: restart at "
-                    "the start frame, step when the frame advances by one (like cloth)")
+        "the start frame, step when the frame advances by one (like cloth)",
+    )
     uid: StringProperty(
-        name="Identity", default="", options={'HIDDEN'},
-        description="Stable identity of this hair object for live playback (survives renames)")
+        name="Identity",
+        default="",
+        options={'HIDDEN'},
+        description="Stable identity of this hair object for live playback (survives renames)",
+    )
     bake_folder: StringProperty(
-        name="Bake Folder", default="", options={'HIDDEN'},
+        name="Bake Folder",
+        default="",
+        options={'HIDDEN'},
         description="Subfolder of the cache folder this object was baked into (its name when "
-                    "first baked), so a renamed object still finds its bake")
+        "first baked), so a renamed object still finds its bake",
+    )
 
 
 def _method_property():
     items = methods.enum_items()
-    return EnumProperty(name="Method", items=items, default=items[0][0],
-                        description="How the hair moves")
+    return EnumProperty(
+        name="Method", items=items, default=items[0][0], description="How the hair moves"
+    )
 
 
 def _group_attribute(struct_name):
@@ -108,7 +160,7 @@ def _group_attribute(struct_name):
         for attribute, name in method.params.items():
             if name == struct_name:
                 return attribute
-    return re.sub(r"(?<!^)(?=[A-Z])", "_", struct_name[:-len("Params")]).lower()
+    return re.sub(r"(?<!^)(?=[A-Z])", "_", struct_name[: -len("Params")]).lower()
 
 
 def settings_groups():
@@ -156,20 +208,40 @@ def unregister():
 def preset_paths():
     """Every solver setting a preset stores, as Python paths under `settings`: the top-level
     choices and every plain value of every settings group."""
-    paths = ["settings.method", "settings.use_collision", "settings.use_default_colliders",
-             "settings.collider_parts"]
+    paths = [
+        "settings.method",
+        "settings.use_collision",
+        "settings.use_default_colliders",
+        "settings.collider_parts",
+    ]
     for attribute, group in _groups.items():
-        paths += [f"settings.{attribute}.{prop.identifier}" for prop in group.bl_rna.properties
-                  if prop.identifier not in ("rna_type", "name") and prop.type != 'POINTER']
+        paths += [
+            f"settings.{attribute}.{prop.identifier}"
+            for prop in group.bl_rna.properties
+            if prop.identifier not in ("rna_type", "name") and prop.type != 'POINTER'
+        ]
     return paths
 
 
 def settings_dict(settings):
     """The solver parameters of a settings group as plain values (for a cache manifest):
     every property but object pointers and the cache's own settings; images by name."""
-    skip = {"rna_type", "name", "enabled", "head", "collider_index", "output_children",
-            "use_billboards", "output_curves", "output_points", "cache_directory",
-            "use_cache", "use_live", "uid", "bake_folder"}
+    skip = {
+        "rna_type",
+        "name",
+        "enabled",
+        "head",
+        "collider_index",
+        "output_children",
+        "use_billboards",
+        "output_curves",
+        "output_points",
+        "cache_directory",
+        "use_cache",
+        "use_live",
+        "uid",
+        "bake_folder",
+    }
     result = {}
     for prop in settings.bl_rna.properties:
         if prop.identifier in skip:

@@ -5,6 +5,7 @@ advances it; `frame()` is what the frame produced, every stream with its layout.
 steps a frame range, writing each frame to the output objects (outputs.py) and, for a bake,
 to a cache. It knows no method by name.
 """
+
 import contextlib
 import time
 
@@ -53,8 +54,10 @@ def head_object(hair_obj, groom):
     """The mesh the roots follow: the artist's choice, else the hair's surface / emitter."""
     head = hair_obj.hairdyn.head or groom.surface
     if head is None:
-        raise HairdynError(f"'{hair_obj.name}' has no head: set Head in the hairdyn panel, or "
-                           "attach the curves to a surface")
+        raise HairdynError(
+            f"'{hair_obj.name}' has no head: set Head in the hairdyn panel, or "
+            "attach the curves to a surface"
+        )
     return head
 
 
@@ -73,18 +76,29 @@ class Simulation:
         settings = hair_obj.hairdyn
         method = methods.get(settings.method)
         if method is None:
-            raise HairdynError(f"'{hair_obj.name}' uses the method '{settings.method}', which "
-                               "this hairdyn does not have")
+            raise HairdynError(
+                f"'{hair_obj.name}' uses the method '{settings.method}', which "
+                "this hairdyn does not have"
+            )
         self.groom = bridge.read_groom(hair_obj, depsgraph)
         self.head = head_object(hair_obj, self.groom)
         head_matrix = bridge.object_matrix(self.head, depsgraph)
+
         def make_colliders():
             if not settings.use_collision:
                 return None
             return colliders.Colliders(hair_obj, self.head, scene, depsgraph)
 
-        build = Build(hair_obj, self.groom, self.head, head_matrix, make_colliders, scene,
-                      depsgraph, self.native)
+        build = Build(
+            hair_obj,
+            self.groom,
+            self.head,
+            head_matrix,
+            make_colliders,
+            scene,
+            depsgraph,
+            self.native,
+        )
         try:
             self.method = method(build)
             self.colliders = build.colliders  # the method may not have asked (Follow Head)
@@ -116,8 +130,9 @@ class Simulation:
         return elapsed_ms
 
     def stretch(self):
-        return self.native.max_relative_stretch(self.groom.curve_offsets,
-                                                self.groom.positions_wo, self.positions)
+        return self.native.max_relative_stretch(
+            self.groom.curve_offsets, self.groom.positions_wo, self.positions
+        )
 
     def nonfinite_points(self):
         return self.native.count_nonfinite(self.positions)
@@ -130,15 +145,22 @@ class Simulation:
 
     def strand_arrays(self):
         positions = self.positions
-        return {"position": positions, "velocity": self.velocities,
-                "direction": point_tangents(self.groom.curve_offsets, positions)}
+        return {
+            "position": positions,
+            "velocity": self.velocities,
+            "direction": point_tangents(self.groom.curve_offsets, positions),
+        }
 
     def streams(self):
         """{name: Stream} of everything a frame produces: the strands (STRANDS: position,
         velocity, direction), then the method's own streams."""
-        strands = Stream({"position": 3, "velocity": 3, "direction": 3}, self.strand_arrays,
-                         self.groom.points_num, offsets=self.groom.curve_offsets,
-                         outputs=STRAND_OUTPUT["outputs"])
+        strands = Stream(
+            {"position": 3, "velocity": 3, "direction": 3},
+            self.strand_arrays,
+            self.groom.points_num,
+            offsets=self.groom.curve_offsets,
+            outputs=STRAND_OUTPUT["outputs"],
+        )
         return {STRANDS: strands, **self.method.streams()}
 
     def frame(self):
@@ -146,10 +168,14 @@ class Simulation:
         the cache stores and outputs.write shows. Never NaN: a broken frame raises instead."""
         broken = self.nonfinite_points()
         if broken:
-            raise HairdynError(f"The simulation of '{self.hair_obj.name}' produced {broken} "
-                               "points that are not finite numbers")
-        return {name: (stream.read(), stream.offsets, stream.output())
-                for name, stream in self.streams().items()}
+            raise HairdynError(
+                f"The simulation of '{self.hair_obj.name}' produced {broken} "
+                "points that are not finite numbers"
+            )
+        return {
+            name: (stream.read(), stream.offsets, stream.output())
+            for name, stream in self.streams().items()
+        }
 
 
 class Runner:
@@ -203,8 +229,10 @@ class Runner:
         try:
             return self._advance()
         except ReferenceError:
-            raise HairdynError("The hair object or its head was deleted during the simulation; "
-                               "the frames written before are kept") from None
+            raise HairdynError(
+                "The hair object or its head was deleted during the simulation; "
+                "the frames written before are kept"
+            ) from None
 
     def _advance(self):
         frame = self.next_frame
@@ -222,8 +250,11 @@ class Runner:
             self.checked_num += penetration["points_num"]
         frame_data = self.simulation.frame()
         if self.cache is not None:
-            self.cache.write_frame(frame, frame_data[STRANDS][0], {
-                name: arrays for name, (arrays, _, _) in frame_data.items() if name != STRANDS})
+            self.cache.write_frame(
+                frame,
+                frame_data[STRANDS][0],
+                {name: arrays for name, (arrays, _, _) in frame_data.items() if name != STRANDS},
+            )
         outputs.write(self.hair_obj, frame_data)
         return frame, ms
 
@@ -232,8 +263,10 @@ class Runner:
         simulation = self.simulation
         try:
             settings = self.hair_obj.hairdyn
-            outputs = [settings.output_curves.name if settings.output_curves else None,
-                       settings.output_points.name if settings.output_points else None]
+            outputs = [
+                settings.output_curves.name if settings.output_curves else None,
+                settings.output_points.name if settings.output_points else None,
+            ]
         except ReferenceError:  # the object was deleted: the figures still stand
             outputs = [None, None]
         return {
@@ -253,7 +286,9 @@ class Runner:
             "colliders": simulation.colliders.names if simulation.colliders else [],
             "penetration_max": float(self.penetration_max),
             "penetration_share": self.deeper_num / self.checked_num if self.checked_num else 0.0,
-            "penetration_tolerance": simulation.colliders.tolerance_wo() if simulation.colliders else None,
+            "penetration_tolerance": simulation.colliders.tolerance_wo()
+            if simulation.colliders
+            else None,
             "collision_build_ms": simulation.colliders.build_ms if simulation.colliders else 0.0,
             "collision_ms": float(np.median(self.collision_ms)) if self.collision_ms else 0.0,
             "blender_version": bpy.app.version_string,

@@ -2,6 +2,7 @@
 sections (collision, cache, output) are written here; each method's sections are generated
 from its adapter's `sections` at registration, and the collision settings show only the
 kinds the method reads (colliders.collision_fields)."""
+
 import bpy
 
 from . import bake, bridge, colliders, methods, native, playback, presets
@@ -43,8 +44,10 @@ def bake_status(obj):
     if report:
         text += f", {report['ms_per_frame']:.2f} ms/frame, stretch {report['stretch_max']:.1e}"
         if report.get("collision"):
-            text += (f", penetration {report['penetration_max'] * 1000:.2f} mm "
-                     f"({report['penetration_share'] * 100:.2f}%)")
+            text += (
+                f", penetration {report['penetration_max'] * 1000:.2f} mm "
+                f"({report['penetration_share'] * 100:.2f}%)"
+            )
     return text
 
 
@@ -87,12 +90,17 @@ class HAIRDYN_PT_main(_HairdynPanel, bpy.types.Panel):
 def section_fields(method, section, group):
     """The fields a method's section shows: those it names, then with `rest` those of the
     group no section of the method names."""
-    names = [p.identifier for p in group.bl_rna.properties if p.identifier not in ("rna_type",
-                                                                                    "name")]
+    names = [
+        p.identifier for p in group.bl_rna.properties if p.identifier not in ("rna_type", "name")
+    ]
     shown = [name for name in section.fields if name in names]
     if section.rest:
-        named = {name for other in method.sections if other.group == section.group
-                 for name in other.fields}
+        named = {
+            name
+            for other in method.sections
+            if other.group == section.group
+            for name in other.fields
+        }
         shown += [name for name in names if name not in named]
     return shown
 
@@ -105,8 +113,11 @@ def _method_panel(method, index, section):
             return False
         settings = context.object.hairdyn
         group = getattr(settings, section.group, None)
-        return settings.method == method.identifier and group is not None and (
-            section.draw is not None or bool(section_fields(method, section, group)))
+        return (
+            settings.method == method.identifier
+            and group is not None
+            and (section.draw is not None or bool(section_fields(method, section, group)))
+        )
 
     def draw_settings(self, layout, settings):
         if section.draw is not None:
@@ -118,14 +129,31 @@ def _method_panel(method, index, section):
             row.active = active is None or bool(active(group))
             row.prop(group, name)
 
-    return type(f"HAIRDYN_PT_{method.identifier.lower()}_{index}", (_SubPanel, bpy.types.Panel), {
-        "bl_label": section.label, "bl_options": set() if section.open else {'DEFAULT_CLOSED'},
-        "poll": classmethod(poll), "draw_settings": draw_settings})
+    return type(
+        f"HAIRDYN_PT_{method.identifier.lower()}_{index}",
+        (_SubPanel, bpy.types.Panel),
+        {
+            "bl_label": section.label,
+            "bl_options": set() if section.open else {'DEFAULT_CLOSED'},
+            "poll": classmethod(poll),
+            "draw_settings": draw_settings,
+        },
+    )
 
 
 class HAIRDYN_UL_colliders(bpy.types.UIList):
-    def draw_item(self, _context, layout, _data, item, _icon, _active_data, _active_prop,
-                  _index=0, _flt_flag=0):
+    def draw_item(
+        self,
+        _context,
+        layout,
+        _data,
+        item,
+        _icon,
+        _active_data,
+        _active_prop,
+        _index=0,
+        _flt_flag=0,
+    ):
         layout.prop(item, "object", text="", emboss=False, icon='MESH_DATA')
 
 
@@ -139,8 +167,9 @@ class HAIRDYN_PT_collision(_SubPanel, bpy.types.Panel):
         layout.active = settings.use_collision
         layout.prop(settings, "use_default_colliders")
         row = layout.row()
-        row.template_list("HAIRDYN_UL_colliders", "", settings, "colliders", settings,
-                          "collider_index", rows=2)
+        row.template_list(
+            "HAIRDYN_UL_colliders", "", settings, "colliders", settings, "collider_index", rows=2
+        )
         buttons = row.column(align=True)
         buttons.operator("hairdyn.collider_add", icon='ADD', text="")
         buttons.operator("hairdyn.collider_remove", icon='REMOVE', text="")
@@ -181,10 +210,19 @@ _registered = []
 
 def panel_classes():
     """Every class this module registers, in panel order."""
-    generated = [_method_panel(method, index, section) for method in methods.all_methods()
-                 for index, section in enumerate(method.sections)]
-    return (HAIRDYN_UL_colliders, HAIRDYN_PT_main, *generated, HAIRDYN_PT_collision,
-            HAIRDYN_PT_cache, HAIRDYN_PT_output)
+    generated = [
+        _method_panel(method, index, section)
+        for method in methods.all_methods()
+        for index, section in enumerate(method.sections)
+    ]
+    return (
+        HAIRDYN_UL_colliders,
+        HAIRDYN_PT_main,
+        *generated,
+        HAIRDYN_PT_collision,
+        HAIRDYN_PT_cache,
+        HAIRDYN_PT_output,
+    )
 
 
 def register():

@@ -2,6 +2,7 @@
 `base.Method`) and one line in BUILTIN; the rest of the add-on iterates the registry and
 never names a method. `register(cls)` adds one at run time (the Method enum follows).
 """
+
 from .base import Build, Method, Section, Stream  # noqa: F401 - the adapters' interface
 from .follow import Follow
 from .lcp import Lcp
@@ -41,9 +42,15 @@ def get(identifier):
 def enum_items():
     """(identifier, label, description, number) for the Method EnumProperty; the numbers stay
     with their method as others are registered, so stored choices survive."""
-    return [(cls.identifier, cls.label, cls.description, _numbers.setdefault(cls.identifier,
-                                                                             len(_numbers)))
-            for cls in _registry.values()]
+    return [
+        (
+            cls.identifier,
+            cls.label,
+            cls.description,
+            _numbers.setdefault(cls.identifier, len(_numbers)),
+        )
+        for cls in _registry.values()
+    ]
 
 
 def on_change(listener):

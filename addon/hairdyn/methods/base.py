@@ -4,6 +4,7 @@ positions, the other point sets it writes (`Stream`: layout and arrays together)
 report fields, and what the panel shows for it (`Section`). Nothing here knows a method by
 name; `methods/__init__.py` is the registry.
 """
+
 import numpy as np
 
 from .. import parameters
@@ -51,8 +52,9 @@ class Build:
     module; `colliders` (colliders.Colliders, or None when collision is off) are built when
     first asked for, so a method checks its own input (the groom) before them."""
 
-    def __init__(self, hair_obj, groom, head, head_matrix, make_colliders, scene, depsgraph,
-                 native):
+    def __init__(
+        self, hair_obj, groom, head, head_matrix, make_colliders, scene, depsgraph, native
+    ):
         self.hair_obj, self.settings = hair_obj, hair_obj.hairdyn
         self.groom, self.head, self.head_matrix = groom, head, head_matrix
         self.scene, self.depsgraph, self.native = scene, depsgraph, native
@@ -68,8 +70,9 @@ class Build:
         """The native parameter struct of the settings group `group_name`, with the scene's
         fields (gravity) filled in."""
         group = getattr(self.settings, group_name)
-        return parameters.native_params(group, getattr(self.native, parameters.struct_name(group)),
-                                        self.scene)
+        return parameters.native_params(
+            group, getattr(self.native, parameters.struct_name(group)), self.scene
+        )
 
     @property
     def collider_set(self):
@@ -121,9 +124,10 @@ def nearest(points, targets, k=1, chunk=1024):
     indices = np.empty((len(points), k), dtype=np.int64)
     distances = np.empty((len(points), k))
     for start in range(0, len(points), chunk):
-        block = ((points[start:start + chunk, None, :] - targets[None, :, :]) ** 2).sum(axis=2)
-        found = np.argpartition(block, k - 1, axis=1)[:, :k] if k > 1 else \
-            block.argmin(axis=1)[:, None]
-        indices[start:start + chunk] = found
-        distances[start:start + chunk] = np.sqrt(np.take_along_axis(block, found, axis=1))
+        block = ((points[start : start + chunk, None, :] - targets[None, :, :]) ** 2).sum(axis=2)
+        found = (
+            np.argpartition(block, k - 1, axis=1)[:, :k] if k > 1 else block.argmin(axis=1)[:, None]
+        )
+        indices[start : start + chunk] = found
+        distances[start : start + chunk] = np.sqrt(np.take_along_axis(block, found, axis=1))
     return indices, distances

@@ -7,6 +7,7 @@ PropertyGroup is generated, and/or add-on-only options), its panel sections, and
 `attach(solver, build)`, called once the solver is built, which adds its native pass.
 `register_extension()` must run before the add-on registers (import it from methods/__init__).
 """
+
 import numpy as np
 
 from ..errors import HairdynError
@@ -43,11 +44,14 @@ def scalp_points(groom, head_mesh, count, seed):
     near = nearest(vertices, roots)[1][:, 0] <= 2.0 * spacing
     triangles = head_mesh.triangles[near[head_mesh.triangles].all(axis=1)]
     if len(triangles) == 0:
-        raise HairdynError("No part of the head lies under the hair roots: interpolated "
-                           "children need the roots on the head's surface")
+        raise HairdynError(
+            "No part of the head lies under the hair roots: interpolated "
+            "children need the roots on the head's surface"
+        )
     corners = vertices[triangles]
-    areas = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
-                                          corners[:, 2] - corners[:, 0]), axis=1)
+    areas = 0.5 * np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
     rng = np.random.default_rng(seed)
     chosen = rng.choice(len(triangles), size=count, p=areas / areas.sum())
     u, v = rng.random(count), rng.random(count)
@@ -61,18 +65,30 @@ def scalp_points(groom, head_mesh, count, seed):
 class Strands(Method):
     identifier = "STRANDS"
     label = "Strands"
-    description = ("Strand dynamics: chains of rigid segments with hinge springs (Kurihara "
-                   "1993), implicit integration (Ward & Lin 2003)")
+    description = (
+        "Strand dynamics: chains of rigid segments with hinge springs (Kurihara "
+        "1993), implicit integration (Ward & Lin 2003)"
+    )
     params = {"strands": "StrandParams"}
     collision = ("maps", "response", "report")
     sections = (
-        Section("Dynamics", "strands", ("integrator", "substeps", "k_theta", "k_phi", "damping",
-                                        "line_density"), open=True),
-        Section("Wind", "strands", ("wind_speed", "wind_direction", "wind_noise",
-                                    "wind_noise_frequency", "air_drag")),
-        Section("Child Hairs", "strands", ("children_per_guide", "child_mode", "child_spread",
-                                           "seed"),
-                active={"child_spread": lambda group: group.child_mode == 'CLUSTER'}),
+        Section(
+            "Dynamics",
+            "strands",
+            ("integrator", "substeps", "k_theta", "k_phi", "damping", "line_density"),
+            open=True,
+        ),
+        Section(
+            "Wind",
+            "strands",
+            ("wind_speed", "wind_direction", "wind_noise", "wind_noise_frequency", "air_drag"),
+        ),
+        Section(
+            "Child Hairs",
+            "strands",
+            ("children_per_guide", "child_mode", "child_spread", "seed"),
+            active={"child_spread": lambda group: group.child_mode == 'CLUSTER'},
+        ),
         Section("More Strand Settings", "strands", rest=True),  # fields added to StrandParams later
     )
     shows = ("output_children",)
@@ -84,9 +100,13 @@ class Strands(Method):
         params = build.params("strands")
         groom = build.groom
         head_mesh = bridge.read_mesh(build.head, build.depsgraph)
-        self.solver = build.native.StrandSolver(groom.curve_offsets, groom.positions_wo,
-                                                build.head_matrix,
-                                                root_normals(groom, head_mesh), params)
+        self.solver = build.native.StrandSolver(
+            groom.curve_offsets,
+            groom.positions_wo,
+            build.head_matrix,
+            root_normals(groom, head_mesh),
+            params,
+        )
         self.children = self._make_children(build, params, head_mesh)
         if build.colliders is not None:
             self.solver.set_colliders(build.colliders.set, build.colliders.params)
@@ -100,11 +120,13 @@ class Strands(Method):
         if count == 0:
             return None
         if params.child_mode == 0:  # cluster
-            return build.native.ChildHairs.around_guides(groom.curve_offsets, count,
-                                                         params.child_spread, params.seed)
+            return build.native.ChildHairs.around_guides(
+                groom.curve_offsets, count, params.child_spread, params.seed
+            )
         roots = scalp_points(groom, head_mesh, count * groom.curves_num, params.seed)
-        return build.native.ChildHairs.between_guides(groom.curve_offsets, groom.positions_wo,
-                                                      self.solver.root_frames, roots)
+        return build.native.ChildHairs.between_guides(
+            groom.curve_offsets, groom.positions_wo, self.solver.root_frames, roots
+        )
 
     def step(self, frame_dt, head_matrix):
         self.solver.step(frame_dt, head_matrix)
@@ -119,10 +141,15 @@ class Strands(Method):
         if self.children is None:
             return {}
         offsets = np.asarray(self.children.curve_offsets)
-        return {"children": Stream({"position": 3},
-                                   lambda: {"position": self.children.positions},
-                                   int(offsets[-1]), offsets=offsets,
-                                   outputs=("output_children",))}
+        return {
+            "children": Stream(
+                {"position": 3},
+                lambda: {"position": self.children.positions},
+                int(offsets[-1]),
+                offsets=offsets,
+                outputs=("output_children",),
+            )
+        }
 
 
 def register_extension(extension):
