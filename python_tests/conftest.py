@@ -4,6 +4,7 @@ Every test that needs a scene opens a fixture from blend_fixtures/ fresh.
 """
 
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -53,6 +54,23 @@ def open_fixture():
         assert path.is_file(), f"missing fixture {path}: run blend_fixtures/make_fixtures.py"
         bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
         return bpy.context.scene
+
+    return load
+
+
+@pytest.fixture
+def saved_fixture(tmp_path):
+    """saved_fixture("head_shake.blend") opens a copy saved in tmp_path (so '//' cache folders
+    land there) and returns its "Hair" object, active, its frame range ending at frame_end."""
+
+    def load(name, frame_end):
+        path = tmp_path / name
+        shutil.copy(FIXTURES / name, path)
+        bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
+        hair = bpy.data.objects["Hair"]
+        hair.hairdyn.frame_end = frame_end
+        bpy.context.view_layer.objects.active = hair
+        return hair
 
     return load
 

@@ -1,12 +1,10 @@
 """Bake to a cache on disk, play it back, resume it; bad caches give errors naming files."""
 import json
-import shutil
 
 import bpy
 import numpy as np
 import pytest
 
-from conftest import FIXTURES
 from hairdyn import bake, bridge, playback
 from hairdyn.cache import Cache, CacheError
 
@@ -92,14 +90,9 @@ def test_unwritable_cache_directory(tmp_path):
 
 
 @pytest.fixture
-def saved_shake(tmp_path):
+def saved_shake(saved_fixture, tmp_path):
     """head_shake.blend saved into tmp_path, so '//' caches land there."""
-    path = tmp_path / "shake.blend"
-    shutil.copy(FIXTURES / "head_shake.blend", path)
-    bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
-    hair = bpy.data.objects["Hair"]
-    hair.hairdyn.frame_end = 24
-    return hair, tmp_path
+    return saved_fixture("head_shake.blend", 24), tmp_path
 
 
 def read_output(hair):
@@ -122,7 +115,7 @@ def test_bake_playback_and_reopen(saved_shake):
         assert np.array_equal(read_output(hair), cache.read_frame(frame)["position"])
     # The bake survives saving and reopening; the handler is still there.
     bpy.ops.wm.save_mainfile()
-    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "shake.blend"), load_ui=False)
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "head_shake.blend"), load_ui=False)
     hair = bpy.data.objects["Hair"]
     assert playback.on_frame_change in bpy.app.handlers.frame_change_post
     bpy.context.scene.frame_set(7)
@@ -241,7 +234,7 @@ def test_reloading_the_file_during_playback_forgets_the_open_caches(saved_shake)
     bpy.context.scene.frame_set(3)
     assert playback._open_caches  # playback opened the cache
     bpy.ops.wm.save_mainfile()
-    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "shake.blend"), load_ui=False)
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "head_shake.blend"), load_ui=False)
     assert not playback._open_caches  # the load handler dropped what belonged to the old file
     bpy.context.scene.frame_set(4)
     hair = bpy.data.objects["Hair"]

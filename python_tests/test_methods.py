@@ -3,8 +3,6 @@ through the bake, playback and the command line; a Strands extension (a substep 
 own settings group) plugs in the same way. The error boundary: an unexpected exception in a
 method cancels the operator with a report and prints its traceback once in playback."""
 
-import shutil
-
 import bpy
 import numpy as np
 import pytest
@@ -74,14 +72,8 @@ def registered():
 
 
 @pytest.fixture
-def shake(tmp_path):
-    path = tmp_path / "shake.blend"
-    shutil.copy(FIXTURES / "head_shake.blend", path)
-    bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
-    hair = bpy.data.objects["Hair"]
-    hair.hairdyn.frame_end = 5
-    bpy.context.view_layer.objects.active = hair
-    return hair
+def shake(saved_fixture):
+    return saved_fixture("head_shake.blend", 5)
 
 
 def output_positions(obj):

@@ -128,14 +128,11 @@ def test_gravity_comes_from_the_scene(struct_name, empty_scene):
     assert gravity == pytest.approx((0.0, 0.0, 0.0) if isinstance(gravity, tuple) else 0.0)
 
 
-def test_manifest_parameters_round_trip(open_fixture, tmp_path):
+def test_manifest_parameters_round_trip(saved_fixture):
     """settings_dict holds every setting of every group, survives JSON, and a bake's manifest
     holds it (with the scene's gravity) so a resume can compare."""
-    open_fixture("head_shake.blend")
-    bpy.ops.wm.save_as_mainfile(filepath=str(tmp_path / "shake.blend"))
-    hair = bpy.data.objects["Hair"]
+    hair = saved_fixture("head_shake.blend", 3)
     settings = hair.hairdyn
-    settings.frame_end = 3
     settings.lcp.h2 = 0.02
     settings.lcp_init.length_source = 'WEIGHTS'
     values = properties.settings_dict(settings)

@@ -3,25 +3,17 @@ manifest, a frame that is a directory, values that are not finite each give a me
 panel and on the console, and nothing of it reaches the scene. A renamed hair object keeps its
 bake and its live simulation."""
 
-import shutil
-
 import bpy
 import numpy as np
 import pytest
 
-from conftest import FIXTURES
 from hairdyn import bake, bridge, playback
 from hairdyn.cache import Cache
 
 
 @pytest.fixture
-def baked(tmp_path):
-    path = tmp_path / "shake.blend"
-    shutil.copy(FIXTURES / "head_shake.blend", path)
-    bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
-    hair = bpy.data.objects["Hair"]
-    hair.hairdyn.frame_end = 6
-    bpy.context.view_layer.objects.active = hair
+def baked(saved_fixture):
+    hair = saved_fixture("head_shake.blend", 6)
     assert bpy.ops.hairdyn.bake() == {'FINISHED'}
     return hair, Cache.open(bake.cache_directory(hair))
 
