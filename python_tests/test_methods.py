@@ -215,3 +215,73 @@ def test_a_strands_extension_adds_its_settings_and_pass(shake, monkeypatch):
         hairdyn.unregister()
         hairdyn.register()
     assert not hasattr(bpy.data.objects["Hair"].hairdyn, "test_pass")
+
+
+class Layout:
+    """Records the properties a panel draws (a stand-in for bpy's UILayout)."""
+
+    def __init__(self, shown):
+        self.shown = shown
+        self.active = self.enabled = self.use_property_split = True
+
+    def prop(self, data, name, **_):
+        self.shown.append(name)
+
+    def prop_search(self, data, name, *_args, **_kwargs):
+        self.shown.append(name)
+
+    def row(self, **_):
+        return self
+
+    column = row
+
+    def operator(self, *_args, **_kwargs):
+        return self
+
+    def label(self, **_):
+        pass
+
+    def template_list(self, *_args, **_kwargs):
+        pass
+
+
+@pytest.mark.parametrize(
+    "method, collision",
+    [
+        ('FOLLOW', ["penetration_tolerance"]),
+        ('STRANDS', ["stiffness", "damping", "friction", "projection_tolerance"]),
+        ('LCP', ["azimuth_num", "penetration_tolerance"]),
+    ],
+)
+def test_panels_show_what_each_method_reads(method, collision, open_fixture):
+    """Each method's sections are drawn for it alone; the collision settings by kind (LCP
+    reads the maps but not the response); gravity comes from the scene and is never shown."""
+    from hairdyn import ui
+
+    open_fixture("head_curves.blend")
+    hair = bpy.data.objects["Hair"]
+    hair.hairdyn.method = method
+
+    class Context:
+        object = hair
+
+    shown = {}
+    for panel in ui.panel_classes():
+        if issubclass(panel, ui._SubPanel) and panel.poll(Context):
+            names = []
+            panel.draw_settings(None, Layout(names), hair.hairdyn)
+            shown[panel.bl_label] = names
+    sections = [s.label for s in methods.get(method).sections]
+    assert set(shown) - {"Collision", "Cache", "Output"} <= set(sections)
+    everything = [name for names in shown.values() for name in names]
+    assert "gravity" not in everything
+    for name in collision:
+        assert name in shown["Collision"], (method, name)
+    if method == 'LCP':
+        assert "stiffness" not in shown["Collision"] and "friction" not in shown["Collision"]
+        assert {"particles_from", "h1", "h2", "body_friction"} <= set(everything)
+    from hairdyn import native, parameters
+
+    for struct_name in methods.get(method).params.values():  # every field but gravity shows
+        fields = parameters.shown_fields(getattr(native.load(), struct_name))
+        assert {f["name"] for f in fields} <= set(everything), struct_name
