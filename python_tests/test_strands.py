@@ -3,6 +3,7 @@ import bpy
 import numpy as np
 import pytest
 
+from conftest import shown
 from hairdyn import bridge, cli, simulation
 
 
@@ -91,7 +92,7 @@ def test_wind_presses_hair_against_the_head(open_fixture, use_collision):
     hair = strands_on(open_fixture, "head_curves.blend")
     strands = hair.hairdyn.strands
     strands.wind_speed, strands.wind_direction, strands.wind_noise = 15.0, (0.0, -1.0, 0.0), 0.0
-    strands.k_theta = strands.k_phi = 0.02
+    strands.k_theta = strands.k_phi = shown("StrandParams", "k_theta", 2e-8)  # N·m/rad
     hair.hairdyn.use_collision = use_collision
     runner = simulation.Runner(bpy.context, hair, 1, 24)
     while not runner.done:
@@ -125,11 +126,11 @@ def test_child_hairs_follow_their_guides(open_fixture):
 def test_set_nested_parameters_from_the_command_line(open_fixture):
     open_fixture("head_curves.blend")
     settings = bpy.data.objects["Hair"].hairdyn
-    cli.apply_settings(settings, ["method=strands", "k_theta=0.5", "strands.damping=2",
+    cli.apply_settings(settings, ["method=strands", "k_theta=0.5", "strands.damping=0.5",
                                   "collision.damping=3", "wind_direction=1,0,0",
                                   "integrator=explicit", "colliders=Body"])
     assert settings.method == 'STRANDS' and settings.strands.k_theta == pytest.approx(0.5)
-    assert settings.strands.damping == pytest.approx(2) and settings.collision.damping == 3
+    assert settings.strands.damping == pytest.approx(0.5) and settings.collision.damping == 3
     assert tuple(settings.strands.wind_direction) == (1, 0, 0)
     assert settings.strands.integrator == 'EXPLICIT'
     assert [item.object.name for item in settings.colliders] == ["Body"]

@@ -67,10 +67,10 @@ def main(out_dir, method):
     bake_s = time.perf_counter() - start
     if result != {'FINISHED'}:
         raise SystemExit("hairdyn demo: the bake failed")
-    from hairdyn import simulation
+    from hairdyn import bake
     from hairdyn.cache import Cache
 
-    cache = Cache.open(simulation.cache_directory(hair))
+    cache = Cache.open(bake.cache_directory(hair))
     report = cache.manifest["report"]
     (out_dir / "demo_report.json").write_text(json.dumps(report, indent=2) + "\n")
 

@@ -9,7 +9,6 @@ settings.method = 'STRANDS'
 settings.use_collision = True
 settings.strands.integrator = 'EXPLICIT'
 settings.strands.substeps = 8
-settings.strands.gravity = 9.81
 settings.strands.wind_speed = 0.0
 settings.strands.children_per_guide = 10
 settings.collision.map_kind = 'CYLINDER'
