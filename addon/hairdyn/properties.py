@@ -21,7 +21,7 @@ from bpy.props import (
 
 from . import methods, native, parameters
 
-SHARED_PARAMS = {"collision": "CollisionParams"}  # groups every method's scene reads
+SHARED_PARAMS = {"collision": "CollisionParams", "wind": "WindParams"}  # groups every method reads
 _registered = []  # the classes register() registered, in order
 _groups = {}  # settings attribute -> PropertyGroup class, as registered
 

@@ -69,7 +69,7 @@ class Strands(Method):
         "Strand dynamics: chains of rigid segments with hinge springs (Kurihara "
         "1993), implicit integration (Ward & Lin 2003)"
     )
-    params = {"strands": "StrandParams"}
+    params = {"strands": "StrandParams", "wind": "WindParams"}
     collision = ("maps", "response", "report")
     sections = (
         Section(
@@ -78,11 +78,8 @@ class Strands(Method):
             ("integrator", "substeps", "k_theta", "k_phi", "damping", "line_density"),
             open=True,
         ),
-        Section(
-            "Wind",
-            "strands",
-            ("wind_speed", "wind_direction", "wind_noise", "wind_noise_frequency", "air_drag"),
-        ),
+        Section("Wind", "wind", rest=True, draw=lambda layout, settings: layout.prop(
+            settings.strands, "air_drag")),
         Section(
             "Child Hairs",
             "strands",
@@ -106,6 +103,7 @@ class Strands(Method):
             build.head_matrix,
             root_normals(groom, head_mesh),
             params,
+            build.params("wind"),
         )
         self.children = self._make_children(build, params, head_mesh)
         if build.colliders is not None:
