@@ -75,14 +75,10 @@ class Strands(Method):
         Section(
             "Dynamics",
             "strands",
-            ("integrator", "substeps", "k_theta", "k_phi", "damping", "line_density"),
+            ("integrator", "substeps", "k_theta", "k_phi", "damping", "line_density", "air_drag"),
             open=True,
         ),
-        Section(
-            "Wind",
-            "strands",
-            ("wind_speed", "wind_direction", "wind_noise", "wind_noise_frequency", "air_drag"),
-        ),
+        Section("Wind", "wind", rest=True),  # the shared WindParams group
         Section(
             "Child Hairs",
             "strands",
@@ -106,6 +102,7 @@ class Strands(Method):
             build.head_matrix,
             root_normals(groom, head_mesh),
             params,
+            build.params("wind"),
         )
         self.children = self._make_children(build, params, head_mesh)
         if build.colliders is not None:
