@@ -128,7 +128,7 @@ def test_set_nested_parameters_from_the_command_line(open_fixture):
     open_fixture("head_curves.blend")
     settings = bpy.data.objects["Hair"].hairdyn
     cli.apply_settings(settings, ["method=strands", "k_theta=0.5", "strands.damping=0.5",
-                                  "collision.damping=3", "wind.direction=1,0,0",
+                                  "collision.damping=3", "direction=1,0,0",
                                   "integrator=explicit", "colliders=Body"])
     assert settings.method == 'STRANDS' and settings.strands.k_theta == pytest.approx(0.5)
     assert settings.strands.damping == pytest.approx(0.5) and settings.collision.damping == 3

@@ -21,7 +21,8 @@ from bpy.props import (
 
 from . import methods, native, parameters
 
-SHARED_PARAMS = {"collision": "CollisionParams", "wind": "WindParams"}  # groups every method reads
+# Groups not tied to one method: the colliders' maps and response, the wind (core/wind.hh).
+SHARED_PARAMS = {"collision": "CollisionParams", "wind": "WindParams"}
 _registered = []  # the classes register() registered, in order
 _groups = {}  # settings attribute -> PropertyGroup class, as registered
 

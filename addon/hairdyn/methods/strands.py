@@ -69,17 +69,16 @@ class Strands(Method):
         "Strand dynamics: chains of rigid segments with hinge springs (Kurihara "
         "1993), implicit integration (Ward & Lin 2003)"
     )
-    params = {"strands": "StrandParams", "wind": "WindParams"}
+    params = {"strands": "StrandParams"}
     collision = ("maps", "response", "report")
     sections = (
         Section(
             "Dynamics",
             "strands",
-            ("integrator", "substeps", "k_theta", "k_phi", "damping", "line_density"),
+            ("integrator", "substeps", "k_theta", "k_phi", "damping", "line_density", "air_drag"),
             open=True,
         ),
-        Section("Wind", "wind", rest=True, draw=lambda layout, settings: layout.prop(
-            settings.strands, "air_drag")),
+        Section("Wind", "wind", rest=True),  # the shared WindParams group
         Section(
             "Child Hairs",
             "strands",
