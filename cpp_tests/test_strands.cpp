@@ -76,9 +76,18 @@ Groom mixed_groom()
   return groom;
 }
 
-StrandParams quiet_params()
+/* These tests are of the kurihara1993 model (Kurihara 1993 §2), which keeps today's behaviour;
+ * the articulated model has its own (test_strands_articulated.cpp). */
+StrandParams kurihara_params()
 {
   StrandParams params;
+  params.model = StrandModel::Kurihara1993;
+  return params;
+}
+
+StrandParams quiet_params()
+{
+  StrandParams params = kurihara_params();
   params.gravity = vec3(0.0f);
   params.air_drag = 0.0f;
   params.damping = 0.0f;
@@ -181,7 +190,7 @@ TEST(Strands, RestShapeHoldsWithoutGravity)
     normals_wo.push_back(glm::normalize(mat3(head) * n));
   }
   for (const Integrator integrator : {Integrator::Explicit, Integrator::Implicit}) {
-    StrandParams params;
+    StrandParams params = kurihara_params();
     params.gravity = vec3(0.0f);
     params.integrator = integrator;
     StrandSolver solver(groom.offsets, rest_wo, head, normals_wo, params);
@@ -339,7 +348,7 @@ TEST(Strands, IntegratorsAgreeAtSmallSteps)
    * trajectories stay within 1% of the strand's length of each other for a second. */
   Groom groom;
   groom.add(wave(vec3(0.0f), 8));
-  StrandParams params;
+  StrandParams params = kurihara_params();
   params.substeps = 40;
   params.integrator = Integrator::Explicit;
   StrandSolver explicit_solver(groom.offsets, groom.positions, mat4(1.0f), {}, params);
@@ -378,7 +387,7 @@ TEST(Strands, NoStretchUnderViolentMotion)
       groom.add(straight(root, root + vec3(u(rng), u(rng), u(rng)) * 0.05f, 0.3f, 16));
     }
   }
-  StrandParams params;
+  StrandParams params = kurihara_params();
   WindParams wind;
   wind.speed = 20.0f;
   wind.turbulence = 1.0f;
@@ -408,7 +417,7 @@ TEST(Strands, HeadMovingRightLeavesStrandsBehind)
   for (int s = 0; s < 8; s++) {
     groom.add(straight(vec3(0.02f * float(s), 0.0f, 0.0f), vec3(0.0f, 0.0f, -1.0f), 0.2f, 10));
   }
-  StrandParams params;
+  StrandParams params = kurihara_params();
   StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), {}, params);
   const float frame_dt = 1.0f / 24.0f;
   const auto tip_offset_x = [&]() {
@@ -446,7 +455,7 @@ TEST(Strands, SameResultOnAnyThreadCount)
   for (int s = 0; s < 300; s++) {
     groom.add(curl(vec3(0.01f * float(s), 0.0f, 0.0f), 12));
   }
-  StrandParams params;
+  StrandParams params = kurihara_params();
   WindParams wind;
   wind.speed = 3.0f;
   std::vector<std::vector<vec3>> results;

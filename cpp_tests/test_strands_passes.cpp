@@ -146,6 +146,7 @@ TEST(StrandsDivergence, StiffExplicitHingesAreReportedNotFedToTheColliders)
   ColliderSet colliders;
   colliders.add(std::make_shared<Collider>(mesh, Span<int32_t>(), Span<int32_t>(), collision));
   StrandParams params;
+  params.model = StrandModel::Kurihara1993;
   params.integrator = Integrator::Explicit;
   params.substeps = 1;
   params.k_theta = params.k_phi = 1e6f;

@@ -140,6 +140,16 @@ class StrandSolver {
   Span<vec2> angular_velocities() const { return angular_velocities_; }
   MutableSpan<vec2> angles_for_write() { return angles_; }
   MutableSpan<vec2> angular_velocities_for_write() { return angular_velocities_; }
+  /* kg/m, c: the material's (articulated) or params.line_density (kurihara1993). */
+  float line_density() const
+  {
+    return params_.model == StrandModel::Articulated ? float(params_.material_line_density()) :
+                                                      params_.line_density;
+  }
+  /* N·m/rad, the articulated model's hinge spring at `point` after the last step: EI over
+   * the length of strand the hinge stands for (half of each neighbouring segment; half the
+   * first segment at the clamped root). */
+  float hinge_stiffness(int64_t point) const { return hinge_stiffness_[size_t(point)]; }
   /* kg·m², I = c d³ / 3 of the segment ending at `point` (Kurihara 1993, eq. 2). */
   float moment_of_inertia(int64_t point) const;
   /* m, the fixed length of the segment ending at `point`. */
@@ -166,6 +176,9 @@ class StrandSolver {
                         vec3 node_velocity, const vec3 &wind_wo, Counts &counts);
   /* False when a node of the strand is not finite or faster than runaway_speed. */
   bool strand_is_sane(int64_t curve) const;
+  /* The articulated chain (strand_dynamics_articulated.cpp). */
+  bool advance_articulated(IndexRange points, const Substep &substep, const mat3 &root_frame,
+                           const vec3 &wind_wo, Counts &counts);
   /* Positions and velocities after passes back into angles and rates, root to tip. */
   void take_back_strand(int64_t curve, const Substep &substep);
 
@@ -198,6 +211,7 @@ class StrandSolver {
   std::vector<vec2> angles_;
   std::vector<vec2> angular_velocities_;
   std::vector<HingeStep<vec2>> hinge_steps_; /* the integrator's coefficients this frame */
+  std::vector<float> hinge_stiffness_;       /* articulated: k = EI / length, this frame */
   std::vector<vec4> trig_; /* (sin θ, cos θ, sin φ, cos φ) of the angles, within a step */
 
   /* Per point. */
