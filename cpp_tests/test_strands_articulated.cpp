@@ -5,7 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
+#include <fstream>
 #include <functional>
+#include <string>
+#include <type_traits>
 
 #include "groom/groom.hh"
 #include "groom/metrics.hh"
@@ -194,4 +198,334 @@ TEST(StrandsArticulated, StaticSagMatchesTheElasticaAtAnyResolution)
           << "Γ " << gamma << ", " << segments << " segments";
     }
   }
+}
+
+namespace {
+
+/* A strand with no bending stiffness to speak of (E at its minimum, Γ ≈ 10¹²) and no
+ * damping: a chain of rods. */
+StrandParams chain_params()
+{
+  StrandParams params;
+  params.youngs_modulus = 1e3f;
+  params.bending_damping = 0.0f;
+  params.air_drag = 0.0f;
+  return params;
+}
+
+/* Swings a chain released at rest from `points` (hanging from points[0]); the angular
+ * frequency of its tip's x. */
+double swing_frequency(const std::vector<vec3> &points, const float seconds)
+{
+  const Strand strand = polyline(points, vec3(0.0f, 0.0f, -1.0f));
+  StrandParams params = chain_params();
+  params.substeps = 4;
+  StrandSolver solver(strand.offsets, strand.positions, mat4(1.0f), strand.normals, params);
+  const float frame_dt = 1.0f / 240.0f;
+  std::vector<double> x;
+  for (int frame = 0; frame < int(seconds / frame_dt); frame++) {
+    solver.step(frame_dt, mat4(1.0f));
+    x.push_back(double(solver.positions().last().x));
+  }
+  return angular_frequency(x, frame_dt);
+}
+
+}  // namespace
+
+TEST(StrandsArticulated, HangingChainLowestMode)
+{
+  /* A heavy chain of length L hanging freely: its lowest mode is ω = 1.2024 √(g/L) (the
+   * first zero of J₀, 2.4048, halved), shape x(y) ∝ J₀(2.4048 √(y/L)) with y the height
+   * above the free end. Released from that shape (1% of L at the tip) at 32 segments. */
+  const float length = 0.3f;
+  const int segments = 32;
+  std::vector<vec3> points;
+  for (int i = 0; i <= segments; i++) {
+    const double s = length * double(i) / segments;
+    const double y = length - s;
+    points.push_back(vec3(float(0.01 * length * std::cyl_bessel_j(0.0, 2.4048 * std::sqrt(y / length))),
+                          0.0f, float(-s)));
+  }
+  const double expected = 1.2024 * std::sqrt(9.81 / length);
+  const double measured = swing_frequency(points, 3.0f);
+  EXPECT_NEAR(measured, expected, 0.03 * expected);
+}
+
+TEST(StrandsArticulated, DoublePendulumNormalModes)
+{
+  /* Two rigid rods of 0.1 m (a strand of 2 segments), released in each normal mode of the
+   * compound double pendulum (reference above), 1° on the first rod. */
+  const double l = 0.1;
+  double omega2[2], shape[2];
+  double_pendulum_modes(9.81, l, omega2, shape);
+  for (int mode = 0; mode < 2; mode++) {
+    const double phi1 = pi / 180.0;
+    const double phi2 = shape[mode] * phi1;
+    const vec3 knee(float(l * std::sin(phi1)), 0.0f, float(-l * std::cos(phi1)));
+    const vec3 tip = knee + vec3(float(l * std::sin(phi2)), 0.0f, float(-l * std::cos(phi2)));
+    const double expected = std::sqrt(omega2[mode]);
+    const double measured = swing_frequency({vec3(0.0f), knee, tip}, 2.0f);
+    EXPECT_NEAR(measured, expected, 0.01 * expected) << "mode " << mode;
+  }
+}
+
+namespace {
+
+/* The tip's path (one position per frame) of a 0.3 m strand hanging from the side of a head
+ * that shakes ±0.6 rad about Z at 1.5 Hz for 48 frames. */
+std::vector<vec3> head_shake_tip_path(const StrandParams &params, const int segments)
+{
+  const Strand strand = straight(vec3(0.1f, 0.0f, 0.0f), vec3(0.0f, 0.0f, -1.0f), 0.3f,
+                                 segments);
+  StrandSolver solver(strand.offsets, strand.positions, mat4(1.0f), strand.normals, params);
+  std::vector<vec3> path;
+  for (int frame = 1; frame <= 48; frame++) {
+    const float t = float(frame) / 24.0f;
+    solver.step(1.0f / 24.0f,
+                glm::rotate(mat4(1.0f), 0.6f * std::sin(2.0f * float(pi) * 1.5f * t),
+                            vec3(0.0f, 0.0f, 1.0f)));
+    EXPECT_EQ(solver.diverged_num(), 0);
+    path.push_back(solver.positions().last());
+  }
+  return path;
+}
+
+double rms_distance(const std::vector<vec3> &a, const std::vector<vec3> &b)
+{
+  double sum = 0.0;
+  for (size_t i = 0; i < a.size(); i++) {
+    sum += double(glm::dot(a[i] - b[i], a[i] - b[i]));
+  }
+  return std::sqrt(sum / double(a.size()));
+}
+
+}  // namespace
+
+TEST(StrandsArticulated, HeadShakeLooksTheSameAt8And32Segments)
+{
+  /* Same material (the defaults: human hair, Γ ≈ 250 at 0.3 m, a swinging chain) cut into 8
+   * and 32 segments: the tips follow the same path within 5% of L (RMS over the frames). The
+   * kurihara1993 model, for contrast, does not converge: its paths differ by far more. */
+  StrandParams params;
+  const double articulated = rms_distance(head_shake_tip_path(params, 8),
+                                          head_shake_tip_path(params, 32));
+  EXPECT_LT(articulated, 0.05 * 0.3);
+  params.model = StrandModel::Kurihara1993;
+  const double kurihara = rms_distance(head_shake_tip_path(params, 8),
+                                       head_shake_tip_path(params, 32));
+  EXPECT_GT(kurihara, 2.0 * articulated);
+}
+
+TEST(StrandsArticulated, StableAtOneSubstepPerFrameStiffOrSoft)
+{
+  /* Stiff (Γ = 0.1): the clamped horizontal strand settles at 1 substep per 24 fps frame,
+   * where the elastica puts it, and comes to rest. */
+  const float length = 0.3f;
+  const Strand strand = straight(vec3(0.0f), vec3(1.0f, 0.0f, 0.0f), length, 16);
+  StrandParams stiff = material_for_gamma(0.1, length);
+  stiff.substeps = 1;
+  StrandSolver solver(strand.offsets, strand.positions, mat4(1.0f), strand.normals, stiff);
+  float speed = 0.0f;
+  for (int frame = 0; frame < 96; frame++) {
+    solver.step(1.0f / 24.0f, mat4(1.0f));
+    ASSERT_EQ(count_nonfinite(solver.positions()), 0);
+    speed = 0.0f;
+    for (const vec3 &v : solver.velocities()) {
+      speed = std::max(speed, glm::length(v));
+    }
+  }
+  EXPECT_EQ(solver.diverged_num(), 0);
+  EXPECT_LT(speed, 1e-3f) << "still moving after 4 s";
+  const double reference = self_weight_drop(0.1);
+  EXPECT_NEAR(-solver.positions().last().z / length, reference, 0.05 * reference);
+
+  /* Soft (Γ = 100 and 250, the defaults' range) under the head shake at 1 substep: no
+   * runaway, and the tip's path within 20% of L (RMS) of the same run at 8 substeps (12% here:
+   * one step per frame damps the swing numerically; it does not blow up). */
+  for (const double gamma : {100.0, 250.0}) {
+    StrandParams soft = material_for_gamma(gamma, 0.3);
+    soft.substeps = 8;
+    const std::vector<vec3> fine = head_shake_tip_path(soft, 16);
+    soft.substeps = 1;
+    const std::vector<vec3> coarse = head_shake_tip_path(soft, 16);
+    EXPECT_EQ(count_nonfinite(coarse), 0);
+    EXPECT_LT(rms_distance(coarse, fine), 0.2 * 0.3) << "Γ " << gamma;
+  }
+}
+
+namespace {
+
+/* Kinetic energy of the rods from their end velocities (exact for a rigid rod with no spin
+ * about its axis: T = m/6 (v₀² + v₀·v₁ + v₁²)), bending energy ½ Σ k q², gravity m g z. */
+double chain_energy(const StrandSolver &solver, const float g)
+{
+  const Span<vec3> x = solver.positions();
+  const Span<vec3> v = solver.velocities();
+  double energy = 0.0;
+  for (int64_t i = 1; i < x.size(); i++) {
+    const double m = double(solver.line_density()) * solver.segment_length(i);
+    energy += m / 6.0 * double(glm::dot(v[i - 1], v[i - 1]) + glm::dot(v[i - 1], v[i]) +
+                               glm::dot(v[i], v[i]));
+    const vec2 q = solver.angles()[i];
+    energy += 0.5 * double(solver.hinge_stiffness(i)) * double(glm::dot(q, q));
+    energy += m * g * 0.5 * double(x[i - 1].z + x[i].z);
+  }
+  return energy;
+}
+
+}  // namespace
+
+TEST(StrandsArticulated, EnergyNeverIncreasesWithDampingAndNoDriving)
+{
+  /* A wavy strand released bent (every hinge deflected), the head still, with bending
+   * damping: with gravity and without, the energy never rises from one frame to the next
+   * (tolerance 1e-6 of the initial energy for float rounding), and it does fall. */
+  std::vector<vec3> points;
+  for (int i = 0; i <= 16; i++) {
+    points.push_back(vec3(0.02f * float(i), 0.005f * std::sin(float(i)), 0.0f));
+  }
+  const Strand strand = polyline(points, vec3(1.0f, 0.0f, 0.0f));
+  for (const float g : {0.0f, 9.81f}) {
+    StrandParams params = material_for_gamma(4.0, 0.3);
+    params.gravity = vec3(0.0f, 0.0f, -g);
+    params.air_drag = 0.0f;
+    params.bending_damping = 0.01f;
+    params.substeps = 4;
+    StrandSolver solver(strand.offsets, strand.positions, mat4(1.0f), strand.normals, params);
+    for (int64_t i = 1; i < solver.positions().size(); i++) {
+      solver.angles_for_write()[i] = vec2(0.05f, -0.04f);
+    }
+    solver.step(1e-6f, mat4(1.0f)); /* Positions follow the angles. */
+    const double start = chain_energy(solver, g);
+    double previous = start;
+    int increases = 0;
+    for (int frame = 0; frame < 240; frame++) {
+      solver.step(1.0f / 240.0f, mat4(1.0f));
+      const double energy = chain_energy(solver, g);
+      increases += energy > previous + 1e-6 * std::abs(start) ? 1 : 0;
+      previous = energy;
+    }
+    EXPECT_EQ(increases, 0) << "g " << g;
+    EXPECT_LT(previous, start) << "g " << g;
+  }
+}
+
+namespace {
+
+/* StrandParams as the shipped preset file sets them: its `settings.strands.<field> = value`
+ * lines, numbers and enum names (upper case of the native choices), matched against
+ * StrandParams' field table. */
+StrandParams params_from_preset(const std::string &path)
+{
+  StrandParams params;
+  std::ifstream file(path);
+  EXPECT_TRUE(file.good()) << path;
+  const std::string prefix = "settings.strands.";
+  std::string line;
+  int fields_set = 0;
+  while (std::getline(file, line)) {
+    if (line.rfind(prefix, 0) != 0) {
+      continue;
+    }
+    const size_t equals = line.find('=');
+    std::string name = line.substr(prefix.size(), equals - prefix.size());
+    name.erase(name.find_last_not_of(' ') + 1);
+    std::string value = line.substr(equals + 1);
+    value.erase(0, value.find_first_not_of(' '));
+    StrandParams::for_each_field([&](auto member, const ParamInfo &info) {
+      using T = std::decay_t<decltype(params.*member)>;
+      if (name != info.name) {
+        return;
+      }
+      if constexpr (std::is_enum_v<T>) {
+        std::string choice = value.substr(1, value.size() - 2); /* 'NAME' */
+        std::string choices = info.choices;
+        std::transform(choices.begin(), choices.end(), choices.begin(), ::toupper);
+        int index = 0;
+        size_t start = 0;
+        while (choices.substr(start, choices.find(',', start) - start) != choice) {
+          start = choices.find(',', start);
+          ASSERT_NE(start, std::string::npos) << choice;
+          start++;
+          index++;
+        }
+        params.*member = T(index);
+        fields_set++;
+      }
+      else if constexpr (std::is_same_v<T, float> || std::is_same_v<T, int32_t>) {
+        params.*member = T(std::stod(value));
+        fields_set++;
+      }
+    });
+  }
+  EXPECT_GT(fields_set, 3) << path;
+  return params;
+}
+
+std::string preset_path(const char *name)
+{
+  std::string here = __FILE__;
+  return here.substr(0, here.rfind("/cpp_tests/")) + "/addon/hairdyn/presets/" + name;
+}
+
+}  // namespace
+
+TEST(StrandsArticulated, StyledPresetHoldsASpikyCrown)
+{
+  /* 300 strands of 12 cm standing straight out of a 0.1 m sphere's crown (normals up to 40°
+   * from vertical), the shipped "styled" preset, gravity on: after 3 s every tip is within 5%
+   * of its length of where the rest shape put it. Loose human hair (the defaults) droops. */
+  const float length = 0.12f;
+  const int strands_num = 300;
+  std::vector<int32_t> offsets{0};
+  std::vector<vec3> positions;
+  std::vector<vec3> normals;
+  const double golden = pi * (3.0 - std::sqrt(5.0));
+  for (int s = 0; s < strands_num; s++) {
+    const double z = 1.0 - (s + 0.5) / strands_num * (1.0 - std::cos(40.0 * pi / 180.0));
+    const double r = std::sqrt(1.0 - z * z);
+    const vec3 normal(float(r * std::cos(golden * s)), float(r * std::sin(golden * s)), float(z));
+    for (int i = 0; i <= 12; i++) {
+      positions.push_back(0.1f * normal + normal * (length * float(i) / 12.0f));
+    }
+    offsets.push_back(int32_t(positions.size()));
+    normals.push_back(normal);
+  }
+  const auto worst_tip_error = [&](const StrandParams &params) {
+    StrandSolver solver(offsets, positions, mat4(1.0f), normals, params);
+    for (int frame = 0; frame < 72; frame++) {
+      solver.step(1.0f / 24.0f, mat4(1.0f));
+    }
+    float worst = 0.0f;
+    for (int s = 0; s < strands_num; s++) {
+      const int32_t tip = offsets[size_t(s) + 1] - 1;
+      worst = std::max(worst, glm::length(solver.positions()[tip] - positions[size_t(tip)]));
+    }
+    return worst / length;
+  };
+  const StrandParams styled = params_from_preset(preset_path("styled.py"));
+  EXPECT_EQ(styled.model, StrandModel::Articulated);
+  EXPECT_LT(worst_tip_error(styled), 0.05f);
+  EXPECT_GT(worst_tip_error(StrandParams()), 0.5f) << "loose hair should droop";
+}
+
+TEST(StrandsArticulated, KuriharaPresetKeepsTheKuriharaModel)
+{
+  EXPECT_EQ(params_from_preset(preset_path("kurihara_1993.py")).model, StrandModel::Kurihara1993);
+}
+
+TEST(StrandsArticulated, GammaOfRealHair)
+{
+  /* Γ = c g L³ / EI = 4 ρ g L³ / (E r²) for a round strand: human hair (E 3.5 GPa, r 40 µm,
+   * 1300 kg/m³) 0.3 m long: 4·1300·9.81·0.027 / (3.5e9 · 1.6e-9) = 245.9. */
+  StrandParams params;
+  EXPECT_NEAR(params.gamma(0.3), 245.9, 0.5);
+  EXPECT_NEAR(params.gamma(0.15) * 8.0, params.gamma(0.3), 1e-6 * params.gamma(0.3));
+  /* The hinge springs are EI over the hinge's share of the strand. */
+  const Strand strand = straight(vec3(0.0f), vec3(1.0f, 0.0f, 0.0f), 0.3f, 10);
+  StrandSolver solver(strand.offsets, strand.positions, mat4(1.0f), strand.normals, params);
+  solver.step(1.0f / 24.0f, mat4(1.0f));
+  const double ei = params.bending_stiffness();
+  EXPECT_NEAR(solver.hinge_stiffness(1), ei / 0.015, 1e-4 * ei / 0.015);
+  EXPECT_NEAR(solver.hinge_stiffness(5), ei / 0.03, 1e-4 * ei / 0.03);
 }

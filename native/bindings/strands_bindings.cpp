@@ -56,6 +56,21 @@ void bind_strands(py::module_ &m)
       .def_property_readonly("name", [](const SubstepPass &self) { return std::string(self.name()); });
 
   m.def(
+      "strand_gamma",
+      [](const StrandParams &params, const double length) {
+        if (!std::isfinite(length) || length <= 0.0) {
+          fail("length must be a positive number of meters, not " + std::to_string(length));
+        }
+        return params.gamma(length);
+      },
+      py::arg("params"), py::arg("length"),
+      "Γ = c g L³ / EI of a strand of `length` meters under the articulated model's material "
+      "(c = ρ π r², EI = E π r⁴ / 4, g = |params.gravity|): well below 1 a strand stands "
+      "nearly straight, well above 100 it hangs like a chain; a horizontal strand's tip drops "
+      "about Γ/8 of its length while Γ is small. The panel shows it for the groom's mean "
+      "strand length.");
+
+  m.def(
       "root_frames",
       [](const py::handle curve_offsets, const py::handle positions,
          const py::handle root_normals) {
