@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "core/parallel.hh"
 #include "groom/frames.hh"
@@ -46,8 +47,10 @@ mat4 pose_matrix(const HeadPose &pose)
 
 StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions_wo,
                            const mat4 &head_to_world_rest, const Span<vec3> root_normals_wo,
-                           const StrandParams &params, const WindParams &wind)
+                           const StrandParams &params, const WindParams &wind,
+                           const glm::dvec3 &origin_wo)
     : params_(params),
+      origin_wo_(origin_wo),
       wind_params_(wind),
       wind_(wind),
       curve_offsets_(curve_offsets.begin(), curve_offsets.end()),
@@ -92,6 +95,13 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
       }
     }
   });
+  shortest_segment_ = std::numeric_limits<float>::infinity();
+  for (int64_t curve = 0; curve < curves; curve++) {
+    const IndexRange curve_range = curve_points(curve_offsets_, curve);
+    for (int64_t i = curve_range.start + 1; i < curve_range.one_after_last(); i++) {
+      shortest_segment_ = std::min(shortest_segment_, rest_lengths_[size_t(i)]);
+    }
+  }
   reset();
 }
 

@@ -85,9 +85,16 @@ class StrandSolver {
    * `rest_positions_wo`. `root_normals_wo` holds one unit normal per strand, or is empty: then
    * each strand's rest first segment gives its root normal. The groom must pass
    * find_groom_error. */
+  /* Far from the world origin single precision cannot resolve a strand (at x = 1e8 m a float
+   * steps by 8 m), so every position and transform the solver takes or gives (rest
+   * positions, head matrices, colliders, passes, outputs) is relative to `origin_wo`, a point
+   * near the character chosen by the caller in double precision (the head's rest position):
+   * the simulation runs in head-relative coordinates wherever the character stands, and
+   * world = origin_wo + position. */
   StrandSolver(Span<int32_t> curve_offsets, Span<vec3> rest_positions_wo,
                const mat4 &head_to_world_rest, Span<vec3> root_normals_wo,
-               const StrandParams &params, const WindParams &wind = WindParams());
+               const StrandParams &params, const WindParams &wind = WindParams(),
+               const glm::dvec3 &origin_wo = glm::dvec3(0.0));
 
   /* Advances one frame of `frame_dt` seconds in params().substeps substeps, the head moving
    * from its previous transform to `head_to_world`. */
@@ -125,6 +132,10 @@ class StrandSolver {
    * by the head, so no NaN ever leaves the solver; the caller should fail the frame. */
   int64_t diverged_num() const { return diverged_num_; }
   static constexpr float runaway_speed = 1000.0f; /* m/s: no hair moves this fast. */
+
+  const glm::dvec3 &origin() const { return origin_wo_; }
+  /* m, the shortest segment of the groom (what single precision must resolve). */
+  float shortest_segment() const { return shortest_segment_; }
 
   int64_t curves_num() const { return int64_t(curve_offsets_.size()) - 1; }
   Span<int32_t> curve_offsets() const { return curve_offsets_; }
@@ -195,6 +206,8 @@ class StrandSolver {
                        const mat3 &chart, vec2 &angles, vec2 &omega) const;
 
   StrandParams params_;
+  glm::dvec3 origin_wo_;
+  float shortest_segment_ = 0.0f;
   WindParams wind_params_;
   WindField wind_;
   std::vector<int32_t> curve_offsets_;
