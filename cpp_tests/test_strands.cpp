@@ -8,6 +8,7 @@
 #include "core/parallel.hh"
 #include "groom/groom.hh"
 #include "groom/metrics.hh"
+#include "oscillation.hh"
 #include "strands/strand_solver.hh"
 
 using namespace hairdyn;
@@ -105,27 +106,6 @@ float max_distance(const Span<vec3> a, const Span<vec3> b)
   return result;
 }
 
-/* Times at which x(t) crosses zero (linear interpolation between samples). */
-std::vector<double> zero_crossings(const std::vector<double> &x, const double dt)
-{
-  std::vector<double> times;
-  for (size_t i = 1; i < x.size(); i++) {
-    if ((x[i - 1] < 0.0) != (x[i] < 0.0)) {
-      times.push_back(dt * (double(i - 1) + x[i - 1] / (x[i - 1] - x[i])));
-    }
-  }
-  return times;
-}
-
-double period_from_crossings(const std::vector<double> &crossings)
-{
-  EXPECT_GE(crossings.size(), 3u);
-  if (crossings.size() < 3) {
-    return 0.0;
-  }
-  return 2.0 * (crossings.back() - crossings.front()) / double(crossings.size() - 1);
-}
-
 /* Period of a single segment of length L, released at rest `amplitude` from hanging, measured
  * on the tip's x. `explicit_normal` decides which angle of the chart carries the swing: the
  * default normal (the segment itself) puts the swing on φ, a vertical normal on θ. */
@@ -147,7 +127,7 @@ double pendulum_period(const float amplitude, const bool explicit_normal)
     solver.step(frame_dt, mat4(1.0f));
     x.push_back(double(solver.positions()[1].x));
   }
-  return period_from_crossings(zero_crossings(x, frame_dt));
+  return test::period_from_crossings(test::zero_crossings(x, frame_dt));
 }
 
 /* Model energy of every segment: ½ I (ω_θ² + ω_φ²) + ½ (k_θ θ² + k_φ φ²) + c d g z_centre.
@@ -254,8 +234,10 @@ TEST(Strands, SpringFrequency)
       phi.push_back(double(solver.angles()[1].y));
     }
     const double inertia = double(solver.moment_of_inertia(1));
-    const double omega_theta = 2.0 * M_PI / period_from_crossings(zero_crossings(theta, frame_dt));
-    const double omega_phi = 2.0 * M_PI / period_from_crossings(zero_crossings(phi, frame_dt));
+    const double omega_theta = 2.0 * M_PI /
+                               test::period_from_crossings(test::zero_crossings(theta, frame_dt));
+    const double omega_phi = 2.0 * M_PI /
+                             test::period_from_crossings(test::zero_crossings(phi, frame_dt));
     EXPECT_NEAR(omega_theta / std::sqrt(double(params.k_theta) / inertia), 1.0, 0.01);
     EXPECT_NEAR(omega_phi / std::sqrt(double(params.k_phi) / inertia), 1.0, 0.01);
   }

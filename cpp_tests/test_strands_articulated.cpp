@@ -13,6 +13,7 @@
 
 #include "groom/groom.hh"
 #include "groom/metrics.hh"
+#include "oscillation.hh"
 #include "strands/strand_solver.hh"
 
 using namespace hairdyn;
@@ -137,28 +138,10 @@ StrandParams material_for_gamma(const double gamma, const double length)
   return params;
 }
 
-/* Times at which x(t) crosses zero (linear interpolation between samples). */
-std::vector<double> zero_crossings(const std::vector<double> &x, const double dt)
-{
-  std::vector<double> times;
-  for (size_t i = 1; i < x.size(); i++) {
-    if ((x[i - 1] < 0.0) != (x[i] < 0.0)) {
-      times.push_back(dt * (double(i - 1) + x[i - 1] / (x[i - 1] - x[i])));
-    }
-  }
-  return times;
-}
-
 double angular_frequency(const std::vector<double> &x, const double dt)
 {
-  const std::vector<double> crossings = zero_crossings(x, dt);
-  EXPECT_GE(crossings.size(), 3u);
-  if (crossings.size() < 3) {
-    return 0.0;
-  }
-  const double period = 2.0 * (crossings.back() - crossings.front()) /
-                        double(crossings.size() - 1);
-  return 2.0 * pi / period;
+  const double period = test::period_from_crossings(test::zero_crossings(x, dt));
+  return period > 0.0 ? 2.0 * pi / period : 0.0;
 }
 
 /* The clamped horizontal strand's settled tip drop over L. */
