@@ -8,6 +8,7 @@
 #include "core/parallel.hh"
 #include "groom/groom.hh"
 #include "groom/metrics.hh"
+#include "oscillation.hh"
 #include "strands/strand_solver.hh"
 
 using namespace hairdyn;
@@ -76,9 +77,18 @@ Groom mixed_groom()
   return groom;
 }
 
-StrandParams quiet_params()
+/* These tests are of the kurihara1993 model (Kurihara 1993 §2), which keeps today's behaviour;
+ * the articulated model has its own (test_strands_articulated.cpp). */
+StrandParams kurihara_params()
 {
   StrandParams params;
+  params.model = StrandModel::Kurihara1993;
+  return params;
+}
+
+StrandParams quiet_params()
+{
+  StrandParams params = kurihara_params();
   params.gravity = vec3(0.0f);
   params.air_drag = 0.0f;
   params.damping = 0.0f;
@@ -94,27 +104,6 @@ float max_distance(const Span<vec3> a, const Span<vec3> b)
     result = std::max(result, glm::length(a[i] - b[i]));
   }
   return result;
-}
-
-/* Times at which x(t) crosses zero (linear interpolation between samples). */
-std::vector<double> zero_crossings(const std::vector<double> &x, const double dt)
-{
-  std::vector<double> times;
-  for (size_t i = 1; i < x.size(); i++) {
-    if ((x[i - 1] < 0.0) != (x[i] < 0.0)) {
-      times.push_back(dt * (double(i - 1) + x[i - 1] / (x[i - 1] - x[i])));
-    }
-  }
-  return times;
-}
-
-double period_from_crossings(const std::vector<double> &crossings)
-{
-  EXPECT_GE(crossings.size(), 3u);
-  if (crossings.size() < 3) {
-    return 0.0;
-  }
-  return 2.0 * (crossings.back() - crossings.front()) / double(crossings.size() - 1);
 }
 
 /* Period of a single segment of length L, released at rest `amplitude` from hanging, measured
@@ -138,7 +127,7 @@ double pendulum_period(const float amplitude, const bool explicit_normal)
     solver.step(frame_dt, mat4(1.0f));
     x.push_back(double(solver.positions()[1].x));
   }
-  return period_from_crossings(zero_crossings(x, frame_dt));
+  return test::period_from_crossings(test::zero_crossings(x, frame_dt));
 }
 
 /* Model energy of every segment: ½ I (ω_θ² + ω_φ²) + ½ (k_θ θ² + k_φ φ²) + c d g z_centre.
@@ -181,7 +170,7 @@ TEST(Strands, RestShapeHoldsWithoutGravity)
     normals_wo.push_back(glm::normalize(mat3(head) * n));
   }
   for (const Integrator integrator : {Integrator::Explicit, Integrator::Implicit}) {
-    StrandParams params;
+    StrandParams params = kurihara_params();
     params.gravity = vec3(0.0f);
     params.integrator = integrator;
     StrandSolver solver(groom.offsets, rest_wo, head, normals_wo, params);
@@ -245,8 +234,10 @@ TEST(Strands, SpringFrequency)
       phi.push_back(double(solver.angles()[1].y));
     }
     const double inertia = double(solver.moment_of_inertia(1));
-    const double omega_theta = 2.0 * M_PI / period_from_crossings(zero_crossings(theta, frame_dt));
-    const double omega_phi = 2.0 * M_PI / period_from_crossings(zero_crossings(phi, frame_dt));
+    const double omega_theta = 2.0 * M_PI /
+                               test::period_from_crossings(test::zero_crossings(theta, frame_dt));
+    const double omega_phi = 2.0 * M_PI /
+                             test::period_from_crossings(test::zero_crossings(phi, frame_dt));
     EXPECT_NEAR(omega_theta / std::sqrt(double(params.k_theta) / inertia), 1.0, 0.01);
     EXPECT_NEAR(omega_phi / std::sqrt(double(params.k_phi) / inertia), 1.0, 0.01);
   }
@@ -339,7 +330,7 @@ TEST(Strands, IntegratorsAgreeAtSmallSteps)
    * trajectories stay within 1% of the strand's length of each other for a second. */
   Groom groom;
   groom.add(wave(vec3(0.0f), 8));
-  StrandParams params;
+  StrandParams params = kurihara_params();
   params.substeps = 40;
   params.integrator = Integrator::Explicit;
   StrandSolver explicit_solver(groom.offsets, groom.positions, mat4(1.0f), {}, params);
@@ -378,7 +369,7 @@ TEST(Strands, NoStretchUnderViolentMotion)
       groom.add(straight(root, root + vec3(u(rng), u(rng), u(rng)) * 0.05f, 0.3f, 16));
     }
   }
-  StrandParams params;
+  StrandParams params = kurihara_params();
   WindParams wind;
   wind.speed = 20.0f;
   wind.turbulence = 1.0f;
@@ -408,7 +399,7 @@ TEST(Strands, HeadMovingRightLeavesStrandsBehind)
   for (int s = 0; s < 8; s++) {
     groom.add(straight(vec3(0.02f * float(s), 0.0f, 0.0f), vec3(0.0f, 0.0f, -1.0f), 0.2f, 10));
   }
-  StrandParams params;
+  StrandParams params = kurihara_params();
   StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), {}, params);
   const float frame_dt = 1.0f / 24.0f;
   const auto tip_offset_x = [&]() {
@@ -446,7 +437,7 @@ TEST(Strands, SameResultOnAnyThreadCount)
   for (int s = 0; s < 300; s++) {
     groom.add(curl(vec3(0.01f * float(s), 0.0f, 0.0f), 12));
   }
-  StrandParams params;
+  StrandParams params = kurihara_params();
   WindParams wind;
   wind.speed = 3.0f;
   std::vector<std::vector<vec3>> results;

@@ -54,6 +54,7 @@ Result drape(const bool with_collision)
 
   const Drape groom;
   StrandParams params;
+  params.model = StrandModel::Kurihara1993;
   params.k_theta = params.k_phi = 1e-9f; /* soft hair: gravity wins */
   StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), groom.normals, params);
   if (with_collision) {

@@ -146,6 +146,7 @@ TEST(StrandsDivergence, StiffExplicitHingesAreReportedNotFedToTheColliders)
   ColliderSet colliders;
   colliders.add(std::make_shared<Collider>(mesh, Span<int32_t>(), Span<int32_t>(), collision));
   StrandParams params;
+  params.model = StrandModel::Kurihara1993;
   params.integrator = Integrator::Explicit;
   params.substeps = 1;
   params.k_theta = params.k_phi = 1e6f;
@@ -167,4 +168,32 @@ TEST(StrandsDivergence, StiffExplicitHingesAreReportedNotFedToTheColliders)
     solver.step(1.0f / 24.0f, swaying_head(frame));
     EXPECT_EQ(solver.diverged_num(), 0);
   }
+}
+
+TEST(StrandsFarFromOrigin, HeadRelativeCoordinatesDoNotDependOnWhereTheCharacterStands)
+{
+  /* Issue 11, row 5: a head at x = 1e8 m. In world single precision the groom cannot even be
+   * written down (a float steps by 8 m there). Given relative to origin_wo (the head's rest
+   * position, in double), the simulation is the one at the world origin, bit for bit, and
+   * origin_wo + positions is the world answer to double precision. */
+  const Groom groom = wavy_groom(12);
+  StrandParams params;
+  WindParams wind;
+  wind.speed = 3.0f;
+  std::vector<std::vector<vec3>> results;
+  for (const double x : {0.0, 1e8}) {
+    StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), {}, params, wind,
+                        glm::dvec3(x, -2.5e7, 0.0));
+    EXPECT_EQ(solver.origin().x, x);
+    for (int frame = 0; frame < 24; frame++) {
+      solver.step(1.0f / 24.0f, swaying_head(frame));
+    }
+    results.emplace_back(solver.positions().begin(), solver.positions().end());
+  }
+  EXPECT_EQ(std::memcmp(results[0].data(), results[1].data(), results[0].size() * sizeof(vec3)),
+            0);
+  EXPECT_LE(max_relative_stretch(groom.offsets, groom.positions, results[1]), 1e-5f);
+  /* What world single precision would have done: the groom's points collapse. */
+  const float far = 1e8f;
+  EXPECT_EQ(far + groom.positions[1].x, far + groom.positions[0].x);
 }

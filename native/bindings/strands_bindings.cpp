@@ -1,9 +1,14 @@
 /* Bindings of native/strands (Kurihara 1993 strand dynamics) and the child hairs of
  * native/groom/children_kurihara1993. */
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
 
 #include "bindings/arrays.hh"
 #include "bindings/params.hh"
+#include "pybind11/stl.h"
 #include "groom/children_kurihara1993.hh"
 #include "groom/frames.hh"
 #include "groom/groom.hh"
@@ -42,6 +47,49 @@ Span<mat3> as_guide_frames(const py::handle obj, const char *name, const int64_t
   return frames;
 }
 
+glm::dvec3 as_origin(const py::handle obj)
+{
+  if (obj.is_none()) {
+    return glm::dvec3(0.0);
+  }
+  const auto values = py::cast<std::vector<double>>(obj);
+  if (values.size() != 3 || !std::isfinite(values[0]) || !std::isfinite(values[1]) ||
+      !std::isfinite(values[2])) {
+    fail("origin_wo must be three finite numbers (meters, world space)");
+  }
+  return glm::dvec3(values[0], values[1], values[2]);
+}
+
+/* Single precision resolves about 1.2e-7 of a coordinate's magnitude: refuse coordinates so
+ * far from the simulation origin that a step of the float is over a thousandth of the
+ * shortest segment, and say how to fix it. */
+void check_precision(const float magnitude, const float shortest_segment, const char *what)
+{
+  const float resolution = magnitude * std::numeric_limits<float>::epsilon();
+  if (resolution > 1e-3f * shortest_segment) {
+    fail(std::string(what) + " lies " + std::to_string(magnitude) +
+         " m from the simulation origin, where single precision only resolves " +
+         std::to_string(resolution) + " m, too coarse for segments of " +
+         std::to_string(shortest_segment) +
+         " m. Pass positions and transforms relative to a point near the character and give "
+         "that point as origin_wo (the head's position, in double precision).");
+  }
+}
+
+float max_magnitude(const Span<vec3> points)
+{
+  float result = 0.0f;
+  for (const vec3 &p : points) {
+    result = std::max({result, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  }
+  return result;
+}
+
+float translation_magnitude(const mat4 &m)
+{
+  return std::max({std::abs(m[3].x), std::abs(m[3].y), std::abs(m[3].z)});
+}
+
 }  // namespace
 
 void bind_strands(py::module_ &m)
@@ -54,6 +102,21 @@ void bind_strands(py::module_ &m)
                           "A groom-wide pass the strand solver runs after every substep "
                           "(volume, hair-hair collision, level of detail).")
       .def_property_readonly("name", [](const SubstepPass &self) { return std::string(self.name()); });
+
+  m.def(
+      "strand_gamma",
+      [](const StrandParams &params, const double length) {
+        if (!std::isfinite(length) || length <= 0.0) {
+          fail("length must be a positive number of meters, not " + std::to_string(length));
+        }
+        return params.gamma(length);
+      },
+      py::arg("params"), py::arg("length"),
+      "Γ = c g L³ / EI of a strand of `length` meters under the articulated model's material "
+      "(c = ρ π r², EI = E π r⁴ / 4, g = |params.gravity|): well below 1 a strand stands "
+      "nearly straight, well above 100 it hangs like a chain; a horizontal strand's tip drops "
+      "about Γ/8 of its length while Γ is small. The panel shows it for the groom's mean "
+      "strand length.");
 
   m.def(
       "root_frames",
@@ -80,18 +143,31 @@ void bind_strands(py::module_ &m)
       "explicitly or implicitly (Ward & Lin 2003, appendix A).")
       .def(py::init([](const py::handle curve_offsets, const py::handle rest_positions_wo,
                        const py::handle head_to_world_rest, const py::handle root_normals_wo,
-                       const StrandParams &params, const WindParams &wind) {
+                       const StrandParams &params, const WindParams &wind,
+                       const py::handle origin_wo) {
              const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
              const Span<vec3> rest = as_float3(rest_positions_wo, "rest_positions_wo");
              check_groom(offsets, rest);
              const Span<vec3> normals = as_root_normals(root_normals_wo, offsets.size() - 1);
              const mat4 head = as_matrix(head_to_world_rest, "head_to_world_rest");
-             py::gil_scoped_release release;
-             return new StrandSolver(offsets, rest, head, normals, params, wind);
+             const glm::dvec3 origin = as_origin(origin_wo);
+             std::unique_ptr<StrandSolver> solver;
+             {
+               py::gil_scoped_release release;
+               solver = std::make_unique<StrandSolver>(offsets, rest, head, normals, params,
+                                                       wind, origin);
+             }
+             check_precision(max_magnitude(rest), solver->shortest_segment(), "The groom");
+             check_precision(translation_magnitude(head), solver->shortest_segment(),
+                             "The head");
+             return solver.release();
            }),
            py::arg("curve_offsets"), py::arg("rest_positions_wo"), py::arg("head_to_world_rest"),
            py::arg("root_normals_wo") = py::none(), py::arg("params") = StrandParams(),
-           py::arg("wind") = WindParams())
+           py::arg("wind") = WindParams(), py::arg("origin_wo") = py::none(),
+           "Every position and transform is relative to origin_wo (3 floats, world meters, "
+           "default 0): choose a point near the character so that precision does not depend "
+           "on where it stands.")
       .def(
           "step",
           [](StrandSolver &self, const double frame_dt, const py::handle head_to_world) {
@@ -99,6 +175,7 @@ void bind_strands(py::module_ &m)
               fail("frame_dt must be between 0 and 10 seconds, not " + std::to_string(frame_dt));
             }
             const mat4 head = as_matrix(head_to_world, "head_to_world");
+            check_precision(translation_magnitude(head), self.shortest_segment(), "The head");
             py::gil_scoped_release release;
             self.step(float(frame_dt), head);
           },
@@ -160,6 +237,27 @@ void bind_strands(py::module_ &m)
                              "Node-substeps the reaction constraint acted on in the last step.")
       .def_property_readonly("projections_num", &StrandSolver::projections_num,
                              "Node-substeps put back on a collider's surface in the last step.")
+      .def_property_readonly(
+          "origin_wo",
+          [](const StrandSolver &self) {
+            return py::make_tuple(self.origin().x, self.origin().y, self.origin().z);
+          },
+          "The world point every position is relative to (meters, double precision).")
+      .def(
+          "world_positions",
+          [](const StrandSolver &self) {
+            const Span<vec3> local = self.positions();
+            py::array_t<double> result({local.size(), int64_t(3)});
+            double *out = result.mutable_data();
+            for (int64_t i = 0; i < local.size(); i++) {
+              for (int axis = 0; axis < 3; axis++) {
+                out[3 * i + axis] = self.origin()[axis] + double(local[i][axis]);
+              }
+            }
+            return result;
+          },
+          "World positions (N, 3) float64: origin_wo + positions, exact wherever the "
+          "character stands (convert to object space in double precision).")
       .def_property_readonly("curves_num", &StrandSolver::curves_num)
       .def_property_readonly(
           "points_num", [](const StrandSolver &self) { return self.positions().size(); })

@@ -1,14 +1,23 @@
 #pragma once
 /* Parameters of the angular strand solver (Kurihara, Anjyo, Thalmann 1993, §2; implicit
- * integration from Ward & Lin 2003, §5.6 and appendix A) and of its child hairs (Kurihara
+ * integration from Ward & Lin 2003, §5.6 and appendix A; the articulated model after
+ * Featherstone's articulated-body algorithm and Hadap 2006) and of its child hairs (Kurihara
  * 1993, §4). Lengths in meters, Blender's Z is up.
  *
- * The defaults describe a single human hair (~70 µm thick, 5·10⁻⁶ kg/m) cut into segments of
+ * The articulated model (the default) reads the material: Young's modulus E, the strand's
+ * radius r and the hair's density ρ give the bending stiffness EI = E π r⁴ / 4 and the line
+ * density c = ρ π r²; each hinge's spring is EI over the length of strand it stands for, so
+ * the look does not depend on how finely a strand is cut. How much a strand of length L
+ * droops is set by the one number Γ = c g L³ / EI (gamma()).
+ *
+ * The kurihara1993 model reads k_θ, k_φ, γ and c per hinge. Its defaults describe a single human hair (~70 µm thick, 5·10⁻⁶ kg/m) cut into segments of
  * about 2 cm (a 0.3 m strand in 16 segments): the hinge springs hold a style against gravity
  * with a sag of roughly 0.1 rad per hinge when the strand is horizontal, and the damping is
  * about a fifth of critical for the hinge spring. The hinge constants are per hinge, so they
  * are tuned for that segment length: halving the segment length asks for roughly half the
  * stiffness for the same look. */
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "core/math.hh"
@@ -31,7 +40,31 @@ enum class ChildMode : int32_t {
   Interpolate = 1, /* Anywhere on the scalp, blending the nearest guides. */
 };
 
+/* The per-strand dynamics. */
+enum class StrandModel : int32_t {
+  /* Full coupled chain: every hinge feels the inertia and the forces of everything distal to
+   * it (articulated-body algorithm), implicit in the hinge springs and damping. */
+  Articulated = 0,
+  /* Kurihara 1993, §2: each hinge moves with its own segment's inertia and load only. */
+  Kurihara1993 = 1,
+};
+
 struct StrandParams {
+  StrandModel model = StrandModel::Articulated;
+  /* Pa, E: Young's modulus of the hair (human hair 3–4 GPa; articulated model). */
+  float youngs_modulus = 3.5e9f;
+  /* m, r: radius of one strand's cross-section (human hair 35–50 µm; articulated model). */
+  float strand_radius = 40e-6f;
+  /* kg/m³, ρ: density of the hair (keratin ≈ 1300; articulated model). */
+  float hair_density = 1300.0f;
+  /* s, τ: Kelvin–Voigt damping of bending, the hinge damping over its stiffness (γ = τ k);
+   * damps fast bending waves, leaves slow swings to the air (articulated model). */
+  float bending_damping = 0.002f;
+  /* ×, the bending stiffness at the root relative to the rest of the strand (gel, a short
+   * cut, a stiff root: > 1); it returns to 1 linearly over root_length. */
+  float root_stiffness = 1.0f;
+  /* Fraction of each strand's length over which root_stiffness fades to 1. */
+  float root_length = 0.3f;
   /* N·m/rad, k_θ (Kurihara 1993, eq. 4): hinge spring toward the rest zenith angle. */
   float k_theta = 1e-7f;
   /* N·m/rad, k_φ (eq. 4): hinge spring toward the rest azimuth. */
@@ -59,8 +92,69 @@ struct StrandParams {
   /* Seed of the child roots: equal seeds give equal bakes. */
   int32_t seed = 0;
 
+  /* N·m², EI = E π r⁴ / 4 away from the root. */
+  double bending_stiffness() const
+  {
+    const double r = strand_radius;
+    return double(youngs_modulus) * M_PI * r * r * r * r / 4.0;
+  }
+  /* kg/m, c = ρ π r² (articulated model). */
+  double material_line_density() const
+  {
+    return double(hair_density) * M_PI * double(strand_radius) * double(strand_radius);
+  }
+  /* The bending stiffness at arc length s of a strand of length L (root profile applied). */
+  double bending_stiffness_at(const double s, const double length) const
+  {
+    const double fade = root_length > 0.0f ? 1.0 - s / (double(root_length) * length) : 0.0;
+    return bending_stiffness() * (1.0 + (double(root_stiffness) - 1.0) * std::max(fade, 0.0));
+  }
+  /* Γ = c g L³ / EI: a strand of length L stands nearly straight well below 1 and hangs like
+   * a chain well above 100 (a horizontal cantilever's tip drops ≈ Γ/8 of L for small Γ). */
+  double gamma(const double length) const
+  {
+    return material_line_density() * double(glm::length(gravity)) * length * length * length /
+           bending_stiffness();
+  }
+
   template<typename Fn> static void for_each_field(Fn &&fn)
   {
+    fn(&StrandParams::model,
+       ParamInfo{"model", "", "", 0.0, 1.0,
+                 "Articulated: the full coupled chain, sag and swing independent of the "
+                 "segment count (Featherstone's articulated-body algorithm, Hadap 2006). "
+                 "Kurihara 1993: each hinge alone, with its own k, γ and c (eq. 1-7)",
+                 "articulated,kurihara1993"});
+    fn(&StrandParams::youngs_modulus,
+       ParamInfo{"youngs_modulus", "E", "Pa", 1e3, 1e12,
+                 "Young's modulus of the hair; bending stiffness EI = E π r^4 / 4 "
+                 "(articulated model; human hair 3-4 GPa)"}
+           .shown_as(1e-9, "GPa")
+           .soft(1e6, 1e10));
+    fn(&StrandParams::strand_radius,
+       ParamInfo{"strand_radius", "r", "m", 1e-7, 0.01,
+                 "Radius of a strand's cross-section; sets EI and the line density "
+                 "(articulated model; human hair 35-50 µm)"}
+           .shown_as(1e6, "µm")
+           .soft(10e-6, 500e-6));
+    fn(&StrandParams::hair_density,
+       ParamInfo{"hair_density", "ρ", "kg/m³", 1.0, 1e5,
+                 "Density of the hair; line density c = ρ π r^2 (articulated model)"}
+           .soft(500.0, 2000.0));
+    fn(&StrandParams::bending_damping,
+       ParamInfo{"bending_damping", "τ", "s", 0.0, 10.0,
+                 "Internal damping of bending, as a relaxation time: hinge damping = τ × hinge "
+                 "stiffness (articulated model)"}
+           .shown_as(1e3, "ms")
+           .soft(0.0, 0.05));
+    fn(&StrandParams::root_stiffness,
+       ParamInfo{"root_stiffness", "", "", 0.01, 1e4,
+                 "Bending stiffness at the root relative to the rest of the strand: > 1 holds "
+                 "a style up (gel, short cut); fades to 1 over root_length (articulated model)"}
+           .soft(1.0, 100.0));
+    fn(&StrandParams::root_length,
+       ParamInfo{"root_length", "", "", 0.0, 1.0,
+                 "Fraction of each strand's length over which root_stiffness fades to 1"});
     fn(&StrandParams::k_theta,
        ParamInfo{"k_theta", "k_θ", "N·m/rad", 0.0, 1.0,
                  "Hinge spring toward the rest zenith angle (Kurihara 1993, eq. 4)"});

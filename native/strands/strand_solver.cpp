@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "core/parallel.hh"
 #include "groom/frames.hh"
@@ -46,8 +47,10 @@ mat4 pose_matrix(const HeadPose &pose)
 
 StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions_wo,
                            const mat4 &head_to_world_rest, const Span<vec3> root_normals_wo,
-                           const StrandParams &params, const WindParams &wind)
+                           const StrandParams &params, const WindParams &wind,
+                           const glm::dvec3 &origin_wo)
     : params_(params),
+      origin_wo_(origin_wo),
       wind_params_(wind),
       wind_(wind),
       curve_offsets_(curve_offsets.begin(), curve_offsets.end()),
@@ -67,6 +70,7 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
   angular_velocities_.assign(points, vec2(0.0f));
   trig_.assign(points, vec4(0.0f, 1.0f, 0.0f, 1.0f));
   hinge_steps_.assign(points, HingeStep<vec2>{vec2(0.0f), vec2(0.0f)});
+  hinge_stiffness_.assign(points, 0.0f);
   positions_wo_.resize(points);
   velocities_wo_.resize(points);
 
@@ -91,6 +95,13 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
       }
     }
   });
+  shortest_segment_ = std::numeric_limits<float>::infinity();
+  for (int64_t curve = 0; curve < curves; curve++) {
+    const IndexRange curve_range = curve_points(curve_offsets_, curve);
+    for (int64_t i = curve_range.start + 1; i < curve_range.one_after_last(); i++) {
+      shortest_segment_ = std::min(shortest_segment_, rest_lengths_[size_t(i)]);
+    }
+  }
   reset();
 }
 
@@ -141,7 +152,7 @@ float StrandSolver::moment_of_inertia(const int64_t point) const
    * so we read it as a typesetting artefact and use the rod: I = c d³ / 3. It matches eq. 5,
    * which applies the segment's load at its centre (lever arm d / 2). */
   const float d = rest_lengths_[size_t(point)];
-  return params_.line_density * d * d * d / 3.0f;
+  return line_density() * d * d * d / 3.0f;
 }
 
 ForceField::ForceField(const StrandParams &params, const float line_density,
@@ -168,6 +179,22 @@ ForceField::ForceField(const StrandParams &params, const float line_density,
 void StrandSolver::prepare_strand(const int64_t curve, const float h)
 {
   const IndexRange points = curve_points(curve_offsets_, curve);
+  if (params_.model == StrandModel::Articulated) {
+    /* The discrete bending energy ½ Σ EI κ² l with κ = angle / l at each hinge, l the length
+     * of strand the hinge stands for (its Voronoi length): k = EI(s) / l at arc length s. */
+    double length = 0.0;
+    for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+      length += rest_lengths_[size_t(i)];
+    }
+    double s = 0.0;
+    for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+      const double d = rest_lengths_[size_t(i)];
+      const double voronoi = i == points.start + 1 ? 0.5 * d :
+                                                     0.5 * (d + rest_lengths_[size_t(i - 1)]);
+      hinge_stiffness_[size_t(i)] = float(params_.bending_stiffness_at(s, length) / voronoi);
+      s += d;
+    }
+  }
   const vec2 k(params_.k_theta, params_.k_phi);
   for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
     hinge_steps_[size_t(i)] = hinge_step(params_.integrator, moment_of_inertia(i), k,
@@ -191,7 +218,7 @@ vec3 StrandSolver::segment_force(const Substep &substep, const size_t i, const v
   Contact contact;
   if (colliders_ != nullptr && colliders_->find_contact(tip, contact)) {
     /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
-    const float mass = params_.line_density * d;
+    const float mass = line_density() * d;
     force = mass * reaction_constraint_force(force / mass, tip_velocity, contact,
                                              substep.reaction);
     counts.contacts++;
@@ -237,7 +264,10 @@ bool StrandSolver::advance_strand(const int64_t curve, const Substep &substep, C
   velocities_wo_[root] = node_velocity;
   root_frames_wo_[size_t(curve)] = frame;
   const vec3 wind_wo = wind_.velocity_at(node, substep.time);
-  const bool finite = advance_kurihara(points, substep, frame, node_velocity, wind_wo, counts);
+  const bool finite = params_.model == StrandModel::Kurihara1993 ?
+                          advance_kurihara(points, substep, frame, node_velocity, wind_wo,
+                                           counts) :
+                          advance_articulated(points, substep, frame, wind_wo, counts);
   if (!finite) {
     counts.diverged++;
     place_at_rest(curve, substep.pose);
@@ -312,7 +342,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     substep.rotation = substep.pose.rotation_matrix();
     substep.head_velocity = velocity;
     head.center = substep.pose.translation;
-    substep.forces = ForceField(params_, params_.line_density, head, velocity);
+    substep.forces = ForceField(params_, line_density(), head, velocity);
     if (colliders_ != nullptr) {
       substep.reaction = ReactionConstants::from(collision_params_, substep.h);
       substep.projection_tolerance_wo = collision_params_.projection_tolerance *

@@ -85,9 +85,16 @@ class StrandSolver {
    * `rest_positions_wo`. `root_normals_wo` holds one unit normal per strand, or is empty: then
    * each strand's rest first segment gives its root normal. The groom must pass
    * find_groom_error. */
+  /* Far from the world origin single precision cannot resolve a strand (at x = 1e8 m a float
+   * steps by 8 m), so every position and transform the solver takes or gives (rest
+   * positions, head matrices, colliders, passes, outputs) is relative to `origin_wo`, a point
+   * near the character chosen by the caller in double precision (the head's rest position):
+   * the simulation runs in head-relative coordinates wherever the character stands, and
+   * world = origin_wo + position. */
   StrandSolver(Span<int32_t> curve_offsets, Span<vec3> rest_positions_wo,
                const mat4 &head_to_world_rest, Span<vec3> root_normals_wo,
-               const StrandParams &params, const WindParams &wind = WindParams());
+               const StrandParams &params, const WindParams &wind = WindParams(),
+               const glm::dvec3 &origin_wo = glm::dvec3(0.0));
 
   /* Advances one frame of `frame_dt` seconds in params().substeps substeps, the head moving
    * from its previous transform to `head_to_world`. */
@@ -126,6 +133,10 @@ class StrandSolver {
   int64_t diverged_num() const { return diverged_num_; }
   static constexpr float runaway_speed = 1000.0f; /* m/s: no hair moves this fast. */
 
+  const glm::dvec3 &origin() const { return origin_wo_; }
+  /* m, the shortest segment of the groom (what single precision must resolve). */
+  float shortest_segment() const { return shortest_segment_; }
+
   int64_t curves_num() const { return int64_t(curve_offsets_.size()) - 1; }
   Span<int32_t> curve_offsets() const { return curve_offsets_; }
   Span<vec3> rest_positions() const { return rest_positions_wo_; }
@@ -140,6 +151,16 @@ class StrandSolver {
   Span<vec2> angular_velocities() const { return angular_velocities_; }
   MutableSpan<vec2> angles_for_write() { return angles_; }
   MutableSpan<vec2> angular_velocities_for_write() { return angular_velocities_; }
+  /* kg/m, c: the material's (articulated) or params.line_density (kurihara1993). */
+  float line_density() const
+  {
+    return params_.model == StrandModel::Articulated ? float(params_.material_line_density()) :
+                                                      params_.line_density;
+  }
+  /* N·m/rad, the articulated model's hinge spring at `point` after the last step: EI over
+   * the length of strand the hinge stands for (half of each neighbouring segment; half the
+   * first segment at the clamped root). */
+  float hinge_stiffness(int64_t point) const { return hinge_stiffness_[size_t(point)]; }
   /* kg·m², I = c d³ / 3 of the segment ending at `point` (Kurihara 1993, eq. 2). */
   float moment_of_inertia(int64_t point) const;
   /* m, the fixed length of the segment ending at `point`. */
@@ -166,6 +187,9 @@ class StrandSolver {
                         vec3 node_velocity, const vec3 &wind_wo, Counts &counts);
   /* False when a node of the strand is not finite or faster than runaway_speed. */
   bool strand_is_sane(int64_t curve) const;
+  /* The articulated chain (strand_dynamics_articulated.cpp). */
+  bool advance_articulated(IndexRange points, const Substep &substep, const mat3 &root_frame,
+                           const vec3 &wind_wo, Counts &counts);
   /* Positions and velocities after passes back into angles and rates, root to tip. */
   void take_back_strand(int64_t curve, const Substep &substep);
 
@@ -182,6 +206,8 @@ class StrandSolver {
                        const mat3 &chart, vec2 &angles, vec2 &omega) const;
 
   StrandParams params_;
+  glm::dvec3 origin_wo_;
+  float shortest_segment_ = 0.0f;
   WindParams wind_params_;
   WindField wind_;
   std::vector<int32_t> curve_offsets_;
@@ -198,6 +224,7 @@ class StrandSolver {
   std::vector<vec2> angles_;
   std::vector<vec2> angular_velocities_;
   std::vector<HingeStep<vec2>> hinge_steps_; /* the integrator's coefficients this frame */
+  std::vector<float> hinge_stiffness_;       /* articulated: k = EI / length, this frame */
   std::vector<vec4> trig_; /* (sin θ, cos θ, sin φ, cos φ) of the angles, within a step */
 
   /* Per point. */

@@ -1,0 +1,230 @@
+/* The articulated strand model: the strand as a chain of rigid rods joined by 2-DOF hinges
+ * (the (θ, φ) of strand_solver.hh), with the full coupled dynamics of the chain, solved in
+ * O(N) per strand by Featherstone's articulated-body algorithm (R. Featherstone, Rigid Body
+ * Dynamics Algorithms, 2008, §7.3 and Table 7.1; the form Hadap 2006, "Oriented Strands:
+ * dynamics of stiff multi-body system", §3–4, applies to hair). Every hinge feels the inertia
+ * and the external forces of everything distal to it, so sag and swing converge as the strand
+ * is cut finer (issue 12: Kurihara 1993, eq. 5 gives a hinge only its own segment's load).
+ *
+ * Quantities are in world axes, each body's referred to its hinge point P_i (the node at its
+ * root); accelerations are classical (ω̇, a_P), so a rigid rod of mass m, centre at h from P,
+ * obeys (τ_P, f) = I_P (ω̇, a_P) + p with
+ *
+ *   I_P = [ (m d²/3)(1 − t tᵀ)   m [h]× ]      p = ( −(m d²/3)(t·ω)(ω × t) − h × F,
+ *         [ −m [h]×              m 1    ]            m ω × (ω × h) − F )
+ *
+ * (Newton–Euler about P; F the external force at the centre, t the rod's direction).
+ * Moving a reference point by r (motion at P_child = motion at P_parent shifted by r):
+ * X = [1 0; −[r]× 1], inertia Xᵀ I X, force (τ + r × f, f) (Featherstone eq. 2.21, 2.24).
+ *
+ * The motion is taken in the head's frame (root fixed, ω and v relative to the head); the
+ * head's motion enters as the fictitious force −m a_rel(r, v_rel) with Coriolis, inside F
+ * (core/head_motion.hh; Kurihara 1993, eq. 6).
+ *
+ * Implicit hinges (Hadap 2006, §4, linearly implicit Euler on the joint springs and dampers):
+ * the hinge torque −k q − γ q̇ is taken at the end of the step, linearised,
+ *   (M + h γ + h² k) Δq̇ = h (τ_ext − bias − k q − (γ + h k) q̇),
+ * and since k and γ act on one hinge each, h γ + h² k simply adds to the hinge's joint-space
+ * inertia D_i (the "armature" of Featherstone §7.3): still one O(N) pass, unconditionally
+ * stable in the springs and damping. Gravity, drag, head forces and the velocity products
+ * stay explicit. */
+#include <cmath>
+#include <vector>
+
+#include "strands/deflection.hh"
+#include "strands/strand_solver.hh"
+
+namespace hairdyn {
+
+namespace {
+
+/* One body of the chain during a substep. */
+struct Body {
+  vec3 s_theta, s_phi;      /* the hinge's axes: q̇ turns the body by θ̇ s_θ + φ̇ s_φ */
+  vec3 arm;                 /* r, from the parent's hinge point to this one */
+  vec3 bias_angular;        /* velocity-product accelerations across the hinge (c_i) */
+  vec3 bias_linear;
+  mat3 a, b, c;             /* articulated inertia at P_i, blocks [a b; bᵀ c] */
+  vec3 p_torque, p_force;   /* articulated bias force at P_i */
+  vec3 u_angular[2], u_linear[2]; /* U = I^A S, one column per hinge axis */
+  glm::mat2 d_inverse;
+  vec2 u;                   /* τ − Sᵀ p^A */
+};
+
+thread_local std::vector<Body> bodies;
+
+inline mat3 outer(const vec3 &x, const vec3 &y)
+{
+  return mat3(x * y.x, x * y.y, x * y.z); /* x yᵀ, column-major */
+}
+
+}  // namespace
+
+bool StrandSolver::advance_articulated(const IndexRange points, const Substep &substep,
+                                       const mat3 &root_frame, const vec3 &wind_wo,
+                                       Counts &counts)
+{
+  const float h = substep.h;
+  const float inv_h = 1.0f / h;
+  const size_t first = size_t(points.start) + 1;
+  const size_t end = size_t(points.one_after_last());
+  bodies.resize(end - first);
+  const float density = line_density();
+  const bool implicit = params_.integrator == Integrator::Implicit;
+  const vec3 head_center = substep.pose.translation;
+
+  /* Pass 1, root to tip (Table 7.1, first loop): geometry, relative velocities, the velocity
+   * products, each rod's inertia and its bias force with the external force F. */
+  mat3 frame = root_frame;
+  vec3 node = positions_wo_[size_t(points.start)];
+  vec3 node_velocity(0.0f);   /* relative to the head */
+  vec3 parent_omega(0.0f);    /* relative to the head */
+  vec3 arm(0.0f);
+  for (size_t i = first; i < end; i++) {
+    Body &body = bodies[i - first];
+    const float d = rest_lengths_[i];
+    const float m = density * d;
+    const mat3 chart = frame * rest_rotations_[i];
+    const Deflection deflection(trig_[i]);
+    frame = deflection.rotate(chart);
+    const vec3 t = frame[2];
+    body.s_theta = frame[1];
+    body.s_phi = -chart[0];
+    const vec2 rate = angular_velocities_[i];
+    const vec3 relative_turn = rate.x * body.s_theta + rate.y * body.s_phi;
+    body.arm = arm;
+    body.bias_angular = glm::cross(parent_omega, relative_turn) -
+                        (rate.x * rate.y) * glm::cross(chart[0], body.s_theta);
+    body.bias_linear = glm::cross(parent_omega, glm::cross(parent_omega, arm));
+    node += arm;
+    node_velocity += glm::cross(parent_omega, arm);
+    const vec3 omega = parent_omega + relative_turn;
+
+    /* The external force at the centre (Kurihara 1993, eq. 6; reaction constraint eq. 12–15
+     * where the tip is inside a collider), from world velocities. */
+    const vec3 half = (0.5f * d) * t;
+    const vec3 center = node + half;
+    const vec3 tip = node + d * t;
+    const vec3 center_velocity = node_velocity + glm::cross(omega, half) +
+                                 substep.head_velocity.of_point(center - head_center);
+    const vec3 tip_velocity = node_velocity + glm::cross(omega, d * t) +
+                              substep.head_velocity.of_point(tip - head_center);
+    const vec3 force = segment_force(substep, i, center, center_velocity, tip, tip_velocity,
+                                     wind_wo, counts);
+
+    /* The rod's inertia about P_i; a sliver of inertia about its own axis (1e-4 of the
+     * transverse one) keeps D regular where a hinge axis meets the rod (θ = ±π/2). */
+    const float transverse = m * d * d / 3.0f;
+    body.a = transverse * (mat3(1.0f) - 0.9999f * outer(t, t));
+    body.b = m * cross_matrix(half);
+    body.c = mat3(m);
+    body.p_torque = -transverse * glm::dot(t, omega) * glm::cross(omega, t) -
+                    glm::cross(half, force);
+    body.p_force = m * glm::cross(omega, glm::cross(omega, half)) - force;
+
+    parent_omega = omega;
+    arm = d * t;
+  }
+
+  /* Pass 2, tip to root (Table 7.1, second loop): U = I^A S, D = Sᵀ U + armature,
+   * u = τ − Sᵀ p^A; the body's articulated inertia and bias less what its hinge absorbs,
+   * I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the parent's hinge point. */
+  for (size_t i = end; i-- > first;) {
+    Body &body = bodies[i - first];
+    const vec3 axes[2] = {body.s_theta, body.s_phi};
+    for (int j = 0; j < 2; j++) {
+      body.u_angular[j] = body.a * axes[j];
+      body.u_linear[j] = glm::transpose(body.b) * axes[j];
+    }
+    const float k = hinge_stiffness_[i];
+    const float gamma = params_.bending_damping * k; /* Kelvin–Voigt: γ = τ k */
+    const vec2 q = angles_[i];
+    const vec2 rate = angular_velocities_[i];
+    /* The hinge spring and damper, linearly implicit (see the top of the file). */
+    const float armature = implicit ? h * gamma + h * h * k : 0.0f;
+    const vec2 hinge_torque = -k * q - (implicit ? gamma + h * k : gamma) * rate;
+    glm::mat2 d_matrix(glm::dot(axes[0], body.u_angular[0]), glm::dot(axes[1], body.u_angular[0]),
+                       glm::dot(axes[0], body.u_angular[1]), glm::dot(axes[1], body.u_angular[1]));
+    d_matrix[0][0] += armature;
+    d_matrix[1][1] += armature;
+    body.d_inverse = glm::inverse(d_matrix);
+    body.u = hinge_torque - vec2(glm::dot(axes[0], body.p_torque),
+                                 glm::dot(axes[1], body.p_torque));
+    if (i == first) {
+      break;
+    }
+    /* I^a = I^A − U D⁻¹ Uᵀ, blockwise. */
+    const glm::mat2 &di = body.d_inverse;
+    const vec3 wa0 = di[0][0] * body.u_angular[0] + di[0][1] * body.u_angular[1];
+    const vec3 wa1 = di[1][0] * body.u_angular[0] + di[1][1] * body.u_angular[1];
+    const vec3 wl0 = di[0][0] * body.u_linear[0] + di[0][1] * body.u_linear[1];
+    const vec3 wl1 = di[1][0] * body.u_linear[0] + di[1][1] * body.u_linear[1];
+    /* U D⁻¹ Uᵀ = Σ_jk U_j (D⁻¹)_jk U_kᵀ = Σ_k (U D⁻¹)_k U_kᵀ. */
+    const mat3 a = body.a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
+    const mat3 b = body.b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
+    const mat3 c = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
+    const vec2 du = di * body.u;
+    const vec3 pa_torque = body.p_torque + a * body.bias_angular + b * body.bias_linear +
+                           du.x * body.u_angular[0] + du.y * body.u_angular[1];
+    const vec3 pa_force = body.p_force + glm::transpose(b) * body.bias_angular +
+                          c * body.bias_linear + du.x * body.u_linear[0] +
+                          du.y * body.u_linear[1];
+    /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c, c. */
+    Body &parent = bodies[i - 1 - first];
+    const mat3 r = cross_matrix(body.arm);
+    const mat3 rc = r * c;
+    const mat3 br = b * r;
+    parent.a += a - br + glm::transpose(-br) - rc * r;
+    parent.b += b + rc;
+    parent.c += c;
+    parent.p_torque += pa_torque + glm::cross(body.arm, pa_force);
+    parent.p_force += pa_force;
+  }
+
+  /* Pass 3, root to tip (Table 7.1, third loop): q̈ = D⁻¹ (u − Uᵀ a'), with a' the parent's
+   * acceleration moved to this hinge plus c; the root is fixed in the head's frame. Then
+   * q̇ += h q̈, q += h q̇ (semi-implicit Euler; the springs already implicit through D). */
+  vec3 parent_alpha(0.0f);
+  vec3 parent_acceleration(0.0f);
+  for (size_t i = first; i < end; i++) {
+    const Body &body = bodies[i - first];
+    const vec3 alpha = parent_alpha + body.bias_angular;
+    const vec3 acceleration = parent_acceleration + glm::cross(parent_alpha, body.arm) +
+                              body.bias_linear;
+    const vec2 ut_a(glm::dot(body.u_angular[0], alpha) + glm::dot(body.u_linear[0], acceleration),
+                    glm::dot(body.u_angular[1], alpha) + glm::dot(body.u_linear[1], acceleration));
+    const vec2 q_acceleration = body.d_inverse * (body.u - ut_a);
+    parent_alpha = alpha + q_acceleration.x * body.s_theta + q_acceleration.y * body.s_phi;
+    parent_acceleration = acceleration;
+    vec2 &omega = angular_velocities_[i];
+    omega += h * q_acceleration;
+    if (!(std::abs(omega.x) + std::abs(omega.y) < runaway_speed / rest_lengths_[i])) {
+      return false; /* Runaway or not a number: caught before it reaches a collider. */
+    }
+    angles_[i] += h * omega;
+  }
+
+  /* The new shape, root to tip, with the no-penetration projection (Ward & Lin 2003 §5.5). */
+  frame = root_frame;
+  node = positions_wo_[size_t(points.start)];
+  for (size_t i = first; i < end; i++) {
+    const float d = rest_lengths_[i];
+    const mat3 chart = frame * rest_rotations_[i];
+    Deflection deflection(angles_[i]);
+    frame = deflection.rotate(chart);
+    vec3 tip = node + d * frame[2];
+    if (project_segment(substep, node, tip, d, chart, angles_[i], angular_velocities_[i])) {
+      counts.projections++;
+      deflection = Deflection(angles_[i]);
+      frame = deflection.rotate(chart);
+      tip = node + d * frame[2];
+    }
+    trig_[i] = deflection.trig();
+    velocities_wo_[i] = (tip - positions_wo_[i]) * inv_h;
+    positions_wo_[i] = tip;
+    node = tip;
+  }
+  return true;
+}
+
+}  // namespace hairdyn
