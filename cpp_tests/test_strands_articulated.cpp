@@ -436,7 +436,7 @@ StrandParams params_from_preset(const std::string &path)
         fields_set++;
       }
       else if constexpr (std::is_same_v<T, float> || std::is_same_v<T, int32_t>) {
-        params.*member = T(std::stod(value));
+        params.*member = T(std::stod(value) / info.display_scale); /* panel units -> SI */
         fields_set++;
       }
     });

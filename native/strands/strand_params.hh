@@ -157,30 +157,35 @@ struct StrandParams {
                  "Fraction of each strand's length over which root_stiffness fades to 1"});
     fn(&StrandParams::k_theta,
        ParamInfo{"k_theta", "k_θ", "N·m/rad", 0.0, 1.0,
-                 "Hinge spring toward the rest zenith angle (Kurihara 1993, eq. 4)"});
+                 "Hinge spring toward the rest zenith angle (Kurihara 1993, eq. 4)"}
+           .shown_as(1e6, "µN·m/rad").soft(0.0, 1e-5).labeled("Stiffness θ"));
     fn(&StrandParams::k_phi,
        ParamInfo{"k_phi", "k_φ", "N·m/rad", 0.0, 1.0,
-                 "Hinge spring toward the rest azimuth (Kurihara 1993, eq. 4)"});
+                 "Hinge spring toward the rest azimuth (Kurihara 1993, eq. 4)"}
+           .shown_as(1e6, "µN·m/rad").soft(0.0, 1e-5).labeled("Stiffness φ"));
     fn(&StrandParams::damping,
        ParamInfo{"damping", "γ", "N·m·s/rad", 0.0, 1.0,
-                 "Damping of each segment's angular velocity (Kurihara 1993, eq. 1)"});
+                 "Damping of each segment's angular velocity (Kurihara 1993, eq. 1)"}
+           .shown_as(1e9, "nN·m·s/rad").soft(0.0, 1e-7));
     fn(&StrandParams::line_density,
        ParamInfo{"line_density", "c", "kg/m", 1e-9, 1.0,
-                 "Mass per length of a strand; sets the moment of inertia (Kurihara 1993, eq. 2)"});
+                 "Mass per length of a strand; sets the moment of inertia (Kurihara 1993, eq. 2)"}
+           .shown_as(1e6, "mg/m").soft(0.0, 1e-4));
     fn(&StrandParams::gravity,
        ParamInfo{"gravity", "g", "m/s²", -100.0, 100.0,
                  "Gravitational acceleration in world space, from the scene (Kurihara 1993, "
                  "eq. 6)"});
     fn(&StrandParams::air_drag,
        ParamInfo{"air_drag", "c_air", "N·s/m²", 0.0, 1.0,
-                 "Air drag per length and relative speed; carries the wind (Kurihara 1993, eq. 6)"});
+                 "Air drag per length and relative speed; carries the wind (Kurihara 1993, eq. 6)"}
+           .shown_as(1e6, "µN·s/m²").soft(0.0, 1e-3));
     fn(&StrandParams::integrator,
        ParamInfo{"integrator", "", "", 0.0, 1.0,
                  "Explicit (Kurihara 1993, eq. 7) or implicit backward Euler (Ward & Lin 2003, "
                  "appendix A)",
                  "explicit,implicit"});
     fn(&StrandParams::substeps,
-       ParamInfo{"substeps", "", "", 1.0, 1000.0, "Solver steps per frame"});
+       ParamInfo{"substeps", "", "", 1.0, 1000.0, "Solver steps per frame"}.soft(1.0, 32.0));
     fn(&StrandParams::children_per_guide,
        ParamInfo{"children_per_guide", "", "", 0.0, 1000.0,
                  "Render hairs generated around each simulated guide (Kurihara 1993, §4)"});
@@ -191,7 +196,8 @@ struct StrandParams {
                  "cluster,interpolate"});
     fn(&StrandParams::child_spread,
        ParamInfo{"child_spread", "", "m", 0.0, 1.0,
-                 "Radius around a guide's root within which its children take root"});
+                 "Radius around a guide's root within which its children take root"}
+           .soft(0.0, 0.05));
     fn(&StrandParams::seed,
        ParamInfo{"seed", "", "", 0.0, 2147483647.0,
                  "Seed of the child hairs' roots"});
