@@ -118,7 +118,7 @@ Fig6Run run_fig6(const bool interactions)
   const float top_z = -0.07f;
   float bar_z = -0.35f;
   bool bar_present = true;
-  solver.set_body_contact([&](const vec3 &p, LcpContact &r_contact) {
+  solver.set_body_contact([&](const vec3 &p, Contact &r_contact) {
     if (!bar_present) {
       return false;
     }

@@ -60,6 +60,9 @@ struct LcpParams {
   /* Fewest time steps per frame: more are taken when the explicit pressure of eq. 16 (CFL)
    * or explicit springs need them. */
   int32_t substeps = 1;
+  /* Most time steps per frame: a frame whose stability bounds (the pressure's CFL, explicit
+   * springs) ask for more is refused with the reason, rather than running for minutes. */
+  int32_t max_substeps = 200;
 
   template<typename Fn> static void for_each_field(Fn &&fn)
   {
@@ -161,6 +164,10 @@ struct LcpParams {
        ParamInfo{"substeps", "", "", 1, 1000,
                  "Fewest time steps per frame; more are taken as the hair-hair pressure (eq. 16) "
                  "or explicit springs need"});
+    fn(&LcpParams::max_substeps,
+       ParamInfo{"max_substeps", "", "", 1, 100000,
+                 "Most time steps per frame: a frame whose stability bounds (hair-hair pressure "
+                 "CFL, explicit springs) need more is refused with the reason"});
   }
 };
 
