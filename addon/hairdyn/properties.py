@@ -232,6 +232,10 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
         name='Substeps', default=1, min=1, max=1000,
         description='Fewest time steps per frame; more are taken as the hair-hair pressure '
                     '(eq. 16) or explicit springs need')
+    max_substeps: IntProperty(
+        name='Max Substeps', default=200, min=1, max=100000,
+        description='Most time steps per frame: a frame whose stability bounds (hair-hair '
+                    'pressure CFL, explicit springs) need more is refused with the reason')
 
 
 class HairdynCollisionSettings(bpy.types.PropertyGroup):
