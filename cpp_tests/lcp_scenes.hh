@@ -1,6 +1,7 @@
 #pragma once
 /* Small LCP scenes shared by the test_lcp_*.cpp files: scalp patches, a head cap, a curtain
  * of back hair, analytic colliders. */
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -137,6 +138,16 @@ inline mat4 violent_shake(const int frame, const vec3 &pivot = vec3(0.0f))
   const float pitch = key(k, pitch_max) + ease * (key(k + 1, pitch_max) - key(k, pitch_max));
   return glm::translate(mat4(1.0f), pivot) * glm::rotate(mat4(1.0f), yaw, vec3(0, 0, 1)) *
          glm::rotate(mat4(1.0f), pitch, vec3(1, 0, 0)) * glm::translate(mat4(1.0f), -pivot);
+}
+
+/* m/s, the fastest particle. */
+inline float max_speed(const LcpSolver &solver)
+{
+  float result = 0.0f;
+  for (const vec3 &v : solver.velocities()) {
+    result = std::max(result, glm::length(v));
+  }
+  return result;
 }
 
 inline vec3 centroid_of_free(const LcpSolver &solver)

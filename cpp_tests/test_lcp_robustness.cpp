@@ -28,14 +28,6 @@ LcpParticles shake_particles(const LcpParams &params)
   return sample(cap_patch(4, 16, head_radius, 0.9f), params);
 }
 
-float max_speed(const LcpSolver &solver)
-{
-  float result = 0.0f;
-  for (const vec3 &v : solver.velocities()) {
-    result = std::max(result, glm::length(v));
-  }
-  return result;
-}
 
 }  // namespace
 
@@ -145,12 +137,12 @@ TEST(LcpRobustness, DocumentedMinimumsAreAccepted)
     }
   });
   EXPECT_EQ(params.h2, 1e-5f);
-  params.wind_speed = 1.0f;
-  LcpSolver solver(params, particles, mat4(1.0f));
+  WindParams wind;
+  wind.speed = 1.0f;
+  LcpSolver solver(params, particles, mat4(1.0f), wind);
   EXPECT_FALSE(solver.step(frame_dt, mat4(1.0f)));
   EXPECT_NE(solver.failure().find("CFL"), std::string::npos) << solver.failure();
   params.pressure_stiffness = 0.0f; /* No pressure: no CFL bound; the frame runs. */
-  params.wind_speed = 0.0f;
   LcpSolver no_pressure(params, particles, mat4(1.0f));
   EXPECT_TRUE(no_pressure.step(frame_dt, mat4(1.0f))) << no_pressure.failure();
   for (const vec3 &p : no_pressure.positions()) {

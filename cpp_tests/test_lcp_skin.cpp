@@ -36,14 +36,12 @@ struct Groom {
   }
   ParticleSkin skin(const mat4 &head = mat4(1.0f)) const
   {
-    std::vector<vec3> x(particles.positions);
-    for (vec3 &p : x) {
-      p = vec3(head * vec4(p, 1.0f));
-    }
-    return ParticleSkin(offsets, transformed(head), x, directions(head), particles.u,
-                        particles.v, particles.s, head);
+    return ParticleSkin(offsets, transformed(head), particles_at(head), directions(head),
+                        particles.u, particles.v, particles.s, head);
   }
-  std::vector<vec3> transformed(const mat4 &m) const
+  std::vector<vec3> transformed(const mat4 &m) const { return transform(m, points); }
+  std::vector<vec3> particles_at(const mat4 &m) const { return transform(m, particles.positions); }
+  static std::vector<vec3> transform(const mat4 &m, const std::vector<vec3> &points)
   {
     std::vector<vec3> result;
     for (const vec3 &p : points) {
@@ -116,22 +114,14 @@ TEST(LcpSkin, RestAndRigidHeadMotionAreExact)
   const mat4 rest_head = glm::translate(mat4(1.0f), vec3(0.1f, 0.0f, 1.5f));
   ParticleSkin skin = groom.skin(rest_head);
   std::vector<vec3> out(groom.points.size());
-  std::vector<vec3> x;
-  for (const vec3 &p : groom.particles.positions) {
-    x.push_back(vec3(rest_head * vec4(p, 1.0f)));
-  }
-  skin.apply(x, rest_head, nullptr, out);
+  skin.apply(groom.particles_at(rest_head), rest_head, nullptr, out);
   const std::vector<vec3> rest = groom.transformed(rest_head);
   for (size_t i = 0; i < out.size(); i++) {
     ASSERT_LT(glm::length(out[i] - rest[i]), 1e-6f) << i;
   }
   const mat4 head = glm::translate(mat4(1.0f), vec3(-0.2f, 0.3f, 1.4f)) *
                     glm::rotate(mat4(1.0f), 0.7f, glm::normalize(vec3(1.0f, 2.0f, 0.5f)));
-  std::vector<vec3> moved;
-  for (const vec3 &p : groom.particles.positions) {
-    moved.push_back(vec3(head * vec4(p, 1.0f)));
-  }
-  skin.apply(moved, head, nullptr, out);
+  skin.apply(groom.particles_at(head), head, nullptr, out);
   const std::vector<vec3> carried = groom.transformed(head);
   for (size_t i = 0; i < out.size(); i++) {
     ASSERT_LT(glm::length(out[i] - carried[i]), 1e-5f) << i;

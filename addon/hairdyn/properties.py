@@ -204,18 +204,12 @@ class HairdynLcpSettings(bpy.types.PropertyGroup):
     friction_damping: FloatProperty(
         name='Friction Damping (d_f)', default=10.0, min=0.0, max=1000000.0, precision=4,
         description='d_f, 1/s: Frictional damping constant of eq. 18 (per unit SPH volume)')
-    gravity: FloatProperty(
-        name='Gravity (g)', default=9.81, min=0.0, max=1000.0, precision=4,
-        description='g, m/s²: Gravity along world −Z (§3.5)')
+    gravity: FloatVectorProperty(
+        name='Gravity (g)', size=3, default=(0.0, 0.0, -9.81), min=-1000.0, max=1000.0,
+        subtype='ACCELERATION', description='g, m/s²: Acceleration of gravity, world space (§3.5)')
     air_friction: FloatProperty(
         name='Air Friction', default=2.0, min=0.0, max=10000.0, precision=4,
         description='1/s: Air friction: damping force proportional to velocity (§3.5)')
-    wind_speed: FloatProperty(
-        name='Wind Speed', default=0.0, min=0.0, max=100.0, precision=4,
-        description='m/s: Free-stream speed of the SPH wind (§3.5); 0 = none')
-    wind_heading: FloatProperty(
-        name='Wind Heading', default=0.0, min=-7.0, max=7.0, precision=4, subtype='ANGLE',
-        description='rad: Horizontal direction the wind blows to, from +X toward +Y')
     wind_particle_spacing: FloatProperty(
         name='Wind Particle Spacing', default=0.03, min=0.001, max=1.0, precision=4, subtype='DISTANCE',
         description='m: Spacing (and smoothing length) of the air particles')

@@ -207,8 +207,8 @@ class HAIRDYN_PT_lcp_forces(_SubPanel, bpy.types.Panel):
 
     def draw_settings(self, layout, settings):
         lcp = settings.lcp
-        for name in ("gravity", "air_friction", "body_friction", "wind_speed", "wind_heading",
-                     "wind_particle_spacing", "wind_drag", "air_density"):
+        for name in ("gravity", "air_friction", "body_friction", "wind_particle_spacing",
+                     "wind_drag", "air_density"):
             layout.prop(lcp, name)
 
 

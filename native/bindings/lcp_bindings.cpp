@@ -191,7 +191,8 @@ void bind_lcp(py::module_ &m)
   py::class_<LcpSolver>(m, "LcpSolver", "Loosely connected particles (Bando 2003).")
       .def(py::init([](const LcpParams &params, const py::handle positions_wo,
                        const py::handle directions_wo, const py::handle u, const py::handle v,
-                       const py::handle s, const py::handle head_to_world_rest) {
+                       const py::handle s, const py::handle head_to_world_rest,
+                       const WindParams &wind) {
              check_lcp_params(params);
              LcpParticles particles;
              const Span<vec3> x = as_float3(positions_wo, "positions");
@@ -217,10 +218,15 @@ void bind_lcp(py::module_ &m)
              particles.v.assign(sv.begin(), sv.end());
              particles.s.assign(ss.begin(), ss.end());
              py::gil_scoped_release release;
-             return new LcpSolver(params, particles, head);
+             return new LcpSolver(params, particles, head, wind);
            }),
            py::arg("params"), py::arg("positions"), py::arg("directions"), py::arg("u"),
-           py::arg("v"), py::arg("s"), py::arg("head_to_world_rest"))
+           py::arg("v"), py::arg("s"), py::arg("head_to_world_rest"),
+           py::arg("wind") = WindParams(),
+           "wind: the shared WindParams, the free stream of the SPH air particles (§3.5).")
+      .def("set_wind", &LcpSolver::set_wind, py::arg("wind"),
+           "Change the wind (WindParams); the air particles start over in it.")
+      .def_property_readonly("wind", &LcpSolver::wind)
       .def(
           "step",
           [](LcpSolver &self, const float frame_dt, const py::handle head_to_world) {

@@ -24,28 +24,30 @@ static vec3 rotate_about(const vec3 &v, const vec3 &omega, const float scale)
   return c * v + sn * glm::cross(axis, v) + (1.0f - c) * glm::dot(axis, v) * axis;
 }
 
-RigidTransform rigid_part(const mat4 &m)
+vec3 LcpSolver::transport_head(const HeadState &head, const vec3 &x)
 {
-  /* Gram-Schmidt on the columns removes scale and shear. */
-  const vec3 x = glm::normalize(vec3(m[0]));
-  const vec3 y = glm::normalize(vec3(m[1]) - glm::dot(vec3(m[1]), x) * x);
-  const vec3 z = glm::cross(x, y);
-  RigidTransform result;
-  result.rotation = glm::normalize(glm::quat_cast(mat3(x, y, z)));
-  result.translation = vec3(m[3]);
-  return result;
+  return glm::transpose(head.rotation) *
+         head.acceleration.transport(head.rotation * x + head.translation);
+}
+
+vec3 LcpSolver::fictitious_acceleration(const int64_t i) const
+{
+  const vec3 &x = x_head_[size_t(i)], &v = v_head_[size_t(i)];
+  return -transport_head(last_head_, x) - 2.0f * glm::cross(last_head_.omega_head, v);
 }
 
 LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
-                     const mat4 &head_to_world_rest)
+                     const mat4 &head_to_world_rest, const WindParams &wind)
     : params_(params),
-      head_rest_(rigid_part(head_to_world_rest)),
+      wind_params_(wind),
+      wind_(wind),
+      head_rest_(HeadPose::from_matrix(head_to_world_rest)),
       u_(particles_wo.u),
       v_(particles_wo.v),
       s_(particles_wo.s)
 {
   const int64_t n = particles_wo.size();
-  const mat3 to_head = glm::transpose(head_rest_.matrix());
+  const mat3 to_head = glm::transpose(head_rest_.rotation_matrix());
   x_rest_head_.resize(size_t(n));
   t_rest_head_.resize(size_t(n));
   is_root_.resize(size_t(n));
@@ -91,6 +93,14 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
   reset();
 }
 
+void LcpSolver::set_wind(const WindParams &wind)
+{
+  wind_params_ = wind;
+  wind_ = WindField(wind);
+  air_x_wo_.clear(); /* The air starts over in the new wind. */
+  air_v_wo_.clear();
+}
+
 void LcpSolver::set_colliders(const ColliderSet *colliders)
 {
   if (colliders == nullptr) {
@@ -108,7 +118,7 @@ void LcpSolver::set_body_contact(ContactQuery query)
   if (!contact_query_) {
     return;
   }
-  const mat3 rotation = head_rest_.matrix();
+  const mat3 rotation = head_rest_.rotation_matrix();
   const mat3 to_head = glm::transpose(rotation);
   /* On the surface, a hair's breadth outside. */
   const auto out_of_body = [&](vec3 &x_head) {
@@ -250,10 +260,10 @@ void LcpSolver::reset()
   t_head_ = t_rest_head_;
   v_head_.assign(x_head_.size(), vec3(0.0f));
   head_ = head_rest_;
-  head_velocity_wo_ = vec3(0.0f);
-  head_omega_wo_ = vec3(0.0f);
+  head_velocity_ = HeadVelocity();
   air_x_wo_.clear();
   air_v_wo_.clear();
+  time_ = 0.0f;
   implicit_springs_.reset();
   failure_.clear();
   compute_spring_coefficients(connections_, x_head_, cross_sections_, params_.h1,
@@ -262,10 +272,10 @@ void LcpSolver::reset()
   find_neighbors(grid_, x_head_, 2.0f * params_.h2, true, neighbors_);
   compute_density(x_head_, masses_, neighbors_, params_.h2, density_);
   HeadState head;
-  head.rotation = head_.matrix();
+  head.rotation = head_.rotation_matrix();
   head.translation = head_.translation;
-  head.velocity_wo = head.omega_head = head.acceleration_head = vec3(0.0f);
-  head.angular_acceleration_head = vec3(0.0f);
+  head.acceleration.center = head.translation;
+  last_head_ = head;
   update_world_outputs(head);
   count_interpenetrations();
 }
@@ -336,43 +346,33 @@ bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
                "), set by " + estimate.reason + ".";
     return false;
   }
-  const RigidTransform next = rigid_part(head_to_world);
-  glm::quat turn = next.rotation * glm::inverse(head_.rotation);
-  if (turn.w < 0.0f) {
-    turn = -turn;
-  }
-  /* The head's motion over this frame: constant velocities between the frame's transforms,
-   * and the change from the previous frame's velocities spread over the frame as the
-   * accelerations of the inertial forces (§3.5). */
-  const vec3 velocity_wo = (next.translation - head_.translation) / frame_dt;
-  const float angle = 2.0f * std::acos(std::min(turn.w, 1.0f));
-  const vec3 axis = vec3(turn.x, turn.y, turn.z);
-  const float axis_len = glm::length(axis);
-  const vec3 omega_wo = axis_len > 1e-12f ? axis / axis_len * (angle / frame_dt) : vec3(0.0f);
-  const vec3 acceleration_wo = (velocity_wo - head_velocity_wo_) / frame_dt;
-  const vec3 angular_acceleration_wo = (omega_wo - head_omega_wo_) / frame_dt;
-
+  /* The head's motion over this frame (core/head_motion.hh): constant velocities between
+   * the frame's poses, and their change since the last frame as the accelerations of the
+   * fictitious forces (§3.5). */
+  const HeadPose next = HeadPose::from_matrix(head_to_world);
+  const HeadVelocity velocity = HeadVelocity::between(head_, next, frame_dt);
+  const HeadAcceleration acceleration = HeadAcceleration::between(head_velocity_, velocity,
+                                                                  frame_dt);
   const auto head_at = [&](const float tau) {
+    const HeadPose pose = HeadPose::interpolate(head_, next, tau);
     HeadState state;
-    state.rotation = glm::mat3_cast(glm::slerp(head_.rotation, next.rotation, tau));
-    state.translation = glm::mix(head_.translation, next.translation, tau);
-    const mat3 to_head = glm::transpose(state.rotation);
-    state.velocity_wo = velocity_wo;
-    state.omega_head = to_head * omega_wo;
-    state.acceleration_head = to_head * acceleration_wo;
-    state.angular_acceleration_head = to_head * angular_acceleration_wo;
+    state.rotation = pose.rotation_matrix();
+    state.translation = pose.translation;
+    state.velocity_wo = velocity.linear;
+    state.omega_head = glm::transpose(state.rotation) * velocity.angular;
+    state.acceleration = acceleration;
+    state.acceleration.center = pose.translation;
     return state;
   };
 
-  if (params_.wind_speed > 0.0f) {
-    wind_box_ = wind_box_around(positions_wo_, params_.wind_heading,
+  if (has_wind()) {
+    wind_box_ = wind_box_around(positions_wo_, wind_params_.direction,
                                 3.0f * params_.wind_particle_spacing);
-    const vec3 wind_wo = wind_box_.axes_wo[0] * params_.wind_speed;
     if (air_x_wo_.empty()) {
-      fill_wind_box(wind_box_, params_.wind_particle_spacing, wind_wo, uint64_t(params_.seed),
-                    air_x_wo_, air_v_wo_);
+      fill_wind_box(wind_box_, params_.wind_particle_spacing, wind_, time_,
+                    uint64_t(params_.seed), air_x_wo_, air_v_wo_);
     }
-    wrap_air_particles(wind_box_, wind_wo, air_x_wo_, air_v_wo_);
+    wrap_air_particles(wind_box_, wind_, time_, air_x_wo_, air_v_wo_);
   }
 
   /* The frame is cut into at least `substeps` equal substeps, short enough for the explicit
@@ -400,6 +400,7 @@ bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
     }
     substep(dt, head_at((elapsed + 0.5f * dt) / frame_dt), head_at((elapsed + dt) / frame_dt));
     elapsed += dt;
+    time_ += dt;
     substeps_used_++;
     check_divergence(substeps_used_);
     if (!failure_.empty()) {
@@ -407,8 +408,7 @@ bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
     }
   }
   head_ = next;
-  head_velocity_wo_ = velocity_wo;
-  head_omega_wo_ = omega_wo;
+  head_velocity_ = velocity;
   update_world_outputs(head_at(1.0f));
   count_interpenetrations();
   return true;
@@ -444,13 +444,14 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
                                              params_.friction_damping};
   accumulate_hair_interactions(x_head_, v_head_, t_head_, masses_, density_, neighbors_,
                                interactions, forces_, damped_forces_, damping_);
-  if (params_.wind_speed > 0.0f) {
+  if (has_wind()) {
     accumulate_wind(dt, mid);
   }
 
   /* 4. Integrate in the head's frame. */
   const mat3 to_head = glm::transpose(mid.rotation);
-  const vec3 gravity_head = to_head * vec3(0.0f, 0.0f, -params_.gravity);
+  const vec3 gravity_head = to_head * params_.gravity;
+  last_head_ = mid;
   const vec3 frame_velocity_head = to_head * mid.velocity_wo;
   const vec3 &w = mid.omega_head;
   parallel_for(n, 1024, [&](const IndexRange range) {
@@ -464,9 +465,9 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
       /* Coriolis force of the head's frame (§3.5), dv/dt = −2 ω × v: exactly, v turned by
        * −2|ω|Δt about ω (Rodrigues). */
       v = rotate_about(v, w, -2.0f * dt);
-      /* The other inertial forces: linear, centrifugal and angular acceleration. */
-      const vec3 inertial = -mid.acceleration_head - glm::cross(w, glm::cross(w, x)) -
-                            glm::cross(mid.angular_acceleration_head, x);
+      /* The other fictitious forces: the transport acceleration (linear, angular and
+       * centrifugal) of core/head_motion.hh. */
+      const vec3 inertial = -transport_head(mid, x);
       const vec3 acceleration = forces_[size_t(i)] / m + gravity_head + inertial;
       /* Damping between particles (springs, eq. 17-18): the factor 2 bounds the damping of
        * relative velocities too (Gershgorin on Σc). */
@@ -502,7 +503,6 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
 {
   const int64_t n = int64_t(x_head_.size());
   const float h = params_.wind_particle_spacing;
-  const vec3 wind_wo = wind_box_.axes_wo[0] * params_.wind_speed;
   /* Hair in world space. */
   parallel_for(n, 4096, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
@@ -527,9 +527,10 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
   find_neighbors(air_grid_, hair_x_wo_, 2.0f * h, false, hair_to_air_);
   find_neighbors(hair_grid_wo_, air_x_wo_, 2.0f * h, false, air_to_hair_);
 
-  /* SPH air: pressure with a sound speed of ten times the wind (weakly compressible), capped
-   * by the step's stability limit 0.4 h / Δt. */
-  const float sound_speed = std::min(10.0f * params_.wind_speed, 0.4f * h / dt);
+  /* SPH air: pressure with a sound speed of ten times the wind's fastest (weakly
+   * compressible), capped by the step's stability limit 0.4 h / Δt. */
+  const float fastest = wind_params_.speed * (1.0f + wind_params_.turbulence);
+  const float sound_speed = std::min(10.0f * fastest, 0.4f * h / dt);
   accumulate_air_pressure(air_x_wo_, air_mass, params_.air_density, sound_speed, h,
                           air_neighbors_, air_density_, air_forces_);
   /* Drag both ways (§3.5). */
@@ -552,7 +553,7 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
       air_x_wo_[size_t(j)] += dt * v;
     }
   });
-  wrap_air_particles(wind_box_, wind_wo, air_x_wo_, air_v_wo_);
+  wrap_air_particles(wind_box_, wind_, time_ + dt, air_x_wo_, air_v_wo_);
 }
 
 void LcpSolver::collide_with_body(const HeadState &end)

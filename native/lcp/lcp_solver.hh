@@ -6,8 +6,10 @@
  *      inertia of the head's frame (§3.5)        4. integrate, then body collisions
  *   5. hair directions, eq. 15.
  * The equations of motion are written in the head's frame: positions and velocities are
- * relative to the head, whose motion enters as inertial forces. Inputs and outputs are in
- * world space.
+ * relative to the head, whose motion enters as the fictitious forces of core/head_motion.hh
+ * (the one head-motion model of every method). The frame is the head pose's rotation and
+ * translation: the hair's lengths are physical, so the head's scale does not scale them.
+ * Inputs and outputs are in world space.
  *
  * Integration: symplectic Euler. The damping forces, linear in the velocities (eq. 17-18,
  * air friction, wind drag), are divided by m_i + Δt Σc, the diagonal of their backward-Euler
@@ -34,6 +36,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "collision/collider.hh"
+#include "core/head_motion.hh"
 #include "core/math.hh"
 #include "core/span.hh"
 #include "core/spatial_grid.hh"
@@ -46,21 +49,12 @@
 
 namespace hairdyn {
 
-/* The rigid part of an object-to-world matrix (scale removed). */
-struct RigidTransform {
-  glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
-  vec3 translation{0.0f};
-
-  mat3 matrix() const { return glm::mat3_cast(rotation); }
-};
-RigidTransform rigid_part(const mat4 &m);
-
 class LcpSolver {
  public:
   /* `particles_wo`: positions and directions in world space with the head at
    * `head_to_world_rest`; s < 0 marks root particles, fixed to the head. */
   LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
-            const mat4 &head_to_world_rest);
+            const mat4 &head_to_world_rest, const WindParams &wind = WindParams());
 
   /* Advances one frame of `frame_dt` seconds to the head transform `head_to_world` (the
    * head's motion is interpolated over the substeps). False, with failure() set, when the
@@ -89,6 +83,9 @@ class LcpSolver {
   void set_colliders(const ColliderSet *colliders);
 
   const LcpParams &params() const { return params_; }
+  /* The wind (core/wind.hh): the free-stream velocity of the air particles. */
+  const WindParams &wind() const { return wind_params_; }
+  void set_wind(const WindParams &wind);
   int64_t particles_num() const { return int64_t(x_head_.size()); }
   int64_t pairs_num() const { return connections_.size(); }
   /* Pairs of particles closer than h₂/2 (see count_close_pairs), after the last step. */
@@ -119,23 +116,33 @@ class LcpSolver {
   Span<float> cross_sections() const { return cross_sections_; }
   /* The root particle each particle is tethered to (itself for a root) and the tether's
    * length: the most its distance to that root can be. */
+  /* The head frame's fictitious acceleration on particle i in its current state (head
+   * components): −Rᵀ a_rel(x, v_rel) of core/head_motion.hh with the head's motion of the last
+   * substep. The integrator applies exactly this: the transport part as it is, the Coriolis
+   * part −2 ω × v as the exact rotation of v whose rate it is. */
+  vec3 fictitious_acceleration(int64_t i) const;
   Span<int32_t> tether_anchors() const { return anchor_; }
   Span<float> tether_lengths() const { return tether_length_; }
 
  private:
   struct HeadState {
-    mat3 rotation;     /* Head to world, at the time the quantity applies. */
-    vec3 translation;
-    vec3 velocity_wo;  /* Of the head frame's origin. */
-    vec3 omega_head;   /* Angular velocity, head components. */
-    vec3 acceleration_head;
-    vec3 angular_acceleration_head;
+    mat3 rotation{1.0f};  /* Head to world, at the time the quantity applies. */
+    vec3 translation{0.0f};
+    vec3 velocity_wo{0.0f}; /* Of the head frame's origin. */
+    vec3 omega_head{0.0f};  /* Angular velocity, head components. */
+    HeadAcceleration acceleration; /* World; its center is `translation`. */
   };
+  /* −Rᵀ of the transport acceleration at particle i's position x (head components). */
+  static vec3 transport_head(const HeadState &head, const vec3 &x);
   /* Rest particles are spaced at least this far apart (separate_close_particles): above the
    * h₂/2 of count_close_pairs, so the rest state has no interpenetrating pair. */
   float rest_min_distance() const { return 0.6f * params_.h2; }
   void substep(float dt, const HeadState &mid, const HeadState &end);
   void accumulate_wind(float dt, const HeadState &mid);
+  bool has_wind() const
+  {
+    return wind_params_.speed > 0.0f && glm::length(wind_params_.direction) > 0.0f;
+  }
   void collide_with_body(const HeadState &end);
   void update_world_outputs(const HeadState &head);
   void count_interpenetrations();
@@ -145,7 +152,7 @@ class LcpSolver {
   void check_divergence(int frame_substep);
 
   LcpParams params_;
-  RigidTransform head_rest_;
+  HeadPose head_rest_;
   /* Rest state, head frame. */
   std::vector<vec3> x_rest_head_, t_rest_head_;
   std::vector<float> u_, v_, s_;
@@ -158,8 +165,9 @@ class LcpSolver {
 
   /* State, head frame. */
   std::vector<vec3> x_head_, v_head_, t_head_;
-  RigidTransform head_;
-  vec3 head_velocity_wo_{0.0f}, head_omega_wo_{0.0f};
+  HeadPose head_;
+  HeadVelocity head_velocity_;
+  HeadState last_head_; /* Of the last substep's middle. */
 
   /* Per step buffers. */
   SpatialGrid grid_;
@@ -170,6 +178,9 @@ class LcpSolver {
   std::vector<vec3> forces_, damped_forces_;
 
   /* Wind. */
+  WindParams wind_params_;
+  WindField wind_;
+  float time_ = 0.0f; /* s, simulated since reset (the wind's clock). */
   WindBox wind_box_;
   std::vector<vec3> air_x_wo_, air_v_wo_, air_forces_, air_damped_forces_;
   std::vector<float> air_density_, air_damping_, air_volumes_;
