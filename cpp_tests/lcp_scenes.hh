@@ -1,6 +1,7 @@
 #pragma once
 /* Small LCP scenes shared by the test_lcp_*.cpp files: scalp patches, a head cap, a curtain
  * of back hair, analytic colliders. */
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -105,9 +106,9 @@ inline LcpParticles curtain(const LcpParams &params)
 }
 
 /* A sphere collider (world space) that moves with the head. */
-inline LcpContactQuery sphere_contact(const vec3 &center, const float radius)
+inline ContactQuery sphere_contact(const vec3 &center, const float radius)
 {
-  return [center, radius](const vec3 &p, LcpContact &r_contact) {
+  return [center, radius](const vec3 &p, Contact &r_contact) {
     const vec3 d = p - center;
     const float dist = glm::length(d);
     if (dist >= radius || dist <= 0.0f) {
@@ -118,6 +119,35 @@ inline LcpContactQuery sphere_contact(const vec3 &center, const float radius)
     r_contact.surface_point_wo = center + r_contact.normal_wo * radius;
     return true;
   };
+}
+
+/* Issue 11's violent shake: keys every 4 frames alternate the head's yaw between +170° and
+ * −170° and its pitch between +45° and −45° (key 0 at rest), eased between keys with
+ * smoothstep (as Blender's default Bézier keys are); yaw about world Z, pitch about the head's
+ * X, about `pivot`. The yaw turns up to 127° in one frame (53 rad/s at 24 frames/s). */
+inline mat4 violent_shake(const int frame, const vec3 &pivot = vec3(0.0f))
+{
+  const auto key = [](const int k, const float amplitude) {
+    return k == 0 ? 0.0f : (k % 2 == 1 ? amplitude : -amplitude);
+  };
+  const int k = frame / 4;
+  const float t = float(frame % 4) / 4.0f;
+  const float ease = t * t * (3.0f - 2.0f * t);
+  const float yaw_max = 170.0f * pi_f / 180.0f, pitch_max = 45.0f * pi_f / 180.0f;
+  const float yaw = key(k, yaw_max) + ease * (key(k + 1, yaw_max) - key(k, yaw_max));
+  const float pitch = key(k, pitch_max) + ease * (key(k + 1, pitch_max) - key(k, pitch_max));
+  return glm::translate(mat4(1.0f), pivot) * glm::rotate(mat4(1.0f), yaw, vec3(0, 0, 1)) *
+         glm::rotate(mat4(1.0f), pitch, vec3(1, 0, 0)) * glm::translate(mat4(1.0f), -pivot);
+}
+
+/* m/s, the fastest particle. */
+inline float max_speed(const LcpSolver &solver)
+{
+  float result = 0.0f;
+  for (const vec3 &v : solver.velocities()) {
+    result = std::max(result, glm::length(v));
+  }
+  return result;
 }
 
 inline vec3 centroid_of_free(const LcpSolver &solver)

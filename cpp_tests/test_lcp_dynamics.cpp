@@ -28,14 +28,6 @@ float mean_pair_stretch(const LcpSolver &solver)
   return float(now / rest - 1.0);
 }
 
-float max_speed(const LcpSolver &solver)
-{
-  float result = 0.0f;
-  for (const vec3 &v : solver.velocities()) {
-    result = std::max(result, glm::length(v));
-  }
-  return result;
-}
 
 }  // namespace
 
@@ -118,7 +110,7 @@ Fig6Run run_fig6(const bool interactions)
   const float top_z = -0.07f;
   float bar_z = -0.35f;
   bool bar_present = true;
-  solver.set_body_contact([&](const vec3 &p, LcpContact &r_contact) {
+  solver.set_body_contact([&](const vec3 &p, Contact &r_contact) {
     if (!bar_present) {
       return false;
     }
@@ -289,11 +281,13 @@ WindRun run_wind(const float wind_speed, const float drag)
 {
   LcpParams params = params_for_spacing(0.011f);
   params.max_length = 0.18f;
-  params.wind_speed = wind_speed;
-  params.wind_heading = 0.5f * pi_f; /* Along +Y, through the curtain. */
+  WindParams wind;
+  wind.speed = wind_speed;
+  wind.direction = vec3(0.0f, 1.0f, 0.0f); /* Through the curtain. */
+  wind.turbulence = 0.0f;
   params.wind_particle_spacing = 0.015f;
   params.wind_drag = drag;
-  LcpSolver solver(params, curtain(params), mat4(1.0f));
+  LcpSolver solver(params, curtain(params), mat4(1.0f), wind);
   const vec3 start = centroid_of_free(solver);
   for (int frame = 0; frame < 24; frame++) {
     solver.step(frame_dt, mat4(1.0f));
@@ -360,13 +354,15 @@ TEST(LcpDynamics, SameResultOnAnyThreadCount)
 {
   LcpParams params = params_for_spacing(0.006f);
   params.max_length = 0.18f;
-  params.wind_speed = 3.0f;
+  WindParams wind; /* with its default turbulence */
+  wind.speed = 3.0f;
+  wind.direction = vec3(1.0f, 0.0f, 0.0f);
   const LcpParticles particles = curtain(params);
   ASSERT_GT(particles.size(), 1500); /* two chunks of the parallel loops at least */
   std::vector<std::vector<vec3>> results;
   for (const int threads : {1, 2}) {
     set_thread_num(threads);
-    LcpSolver solver(params, particles, mat4(1.0f));
+    LcpSolver solver(params, particles, mat4(1.0f), wind);
     solver.set_body_contact(sphere_contact(vec3(0.0f, 0.06f, -0.1f), 0.05f));
     for (int frame = 0; frame < 6; frame++) {
       solver.step(frame_dt, glm::rotate(mat4(1.0f), 0.05f * float(frame), vec3(0, 0, 1)));

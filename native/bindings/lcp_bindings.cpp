@@ -9,6 +9,7 @@
 #include "lcp/lcp_solver.hh"
 #include "lcp/sampling_bando2003.hh"
 #include "lcp/scalp_map_bando2003.hh"
+#include "lcp/strand_skin_bando2003.hh"
 
 namespace hairdyn::bindings {
 
@@ -52,6 +53,17 @@ void check_scalp(const Span<vec3> vertices, const Span<ivec3> triangles)
   if (!error.empty()) {
     fail("Invalid scalp: " + error + ".");
   }
+}
+
+/* A head matrix the skin can invert. */
+mat4 as_head_matrix(const py::handle obj, const char *name)
+{
+  const mat4 m = as_matrix(obj, name);
+  const double det = glm::determinant(glm::dmat3(mat3(m)));
+  if (!std::isfinite(det) || std::abs(det) < 1e-30) {
+    fail(std::string(name) + " is singular (a zero scale?): the head's space is undefined");
+  }
+  return m;
 }
 
 py::dict particles_dict(LcpParticles &&particles)
@@ -179,7 +191,8 @@ void bind_lcp(py::module_ &m)
   py::class_<LcpSolver>(m, "LcpSolver", "Loosely connected particles (Bando 2003).")
       .def(py::init([](const LcpParams &params, const py::handle positions_wo,
                        const py::handle directions_wo, const py::handle u, const py::handle v,
-                       const py::handle s, const py::handle head_to_world_rest) {
+                       const py::handle s, const py::handle head_to_world_rest,
+                       const WindParams &wind) {
              check_lcp_params(params);
              LcpParticles particles;
              const Span<vec3> x = as_float3(positions_wo, "positions");
@@ -205,10 +218,15 @@ void bind_lcp(py::module_ &m)
              particles.v.assign(sv.begin(), sv.end());
              particles.s.assign(ss.begin(), ss.end());
              py::gil_scoped_release release;
-             return new LcpSolver(params, particles, head);
+             return new LcpSolver(params, particles, head, wind);
            }),
            py::arg("params"), py::arg("positions"), py::arg("directions"), py::arg("u"),
-           py::arg("v"), py::arg("s"), py::arg("head_to_world_rest"))
+           py::arg("v"), py::arg("s"), py::arg("head_to_world_rest"),
+           py::arg("wind") = WindParams(),
+           "wind: the shared WindParams, the free stream of the SPH air particles (§3.5).")
+      .def("set_wind", &LcpSolver::set_wind, py::arg("wind"),
+           "Change the wind (WindParams); the air particles start over in it.")
+      .def_property_readonly("wind", &LcpSolver::wind)
       .def(
           "step",
           [](LcpSolver &self, const float frame_dt, const py::handle head_to_world) {
@@ -216,30 +234,41 @@ void bind_lcp(py::module_ &m)
               fail("frame_dt must be a positive number of seconds");
             }
             const mat4 head = as_matrix(head_to_world, "head_to_world");
-            py::gil_scoped_release release;
-            self.step(frame_dt, head);
+            bool ok = false;
+            {
+              py::gil_scoped_release release;
+              ok = self.step(frame_dt, head);
+            }
+            if (!ok) {
+              fail(self.failure());
+            }
           },
           py::arg("frame_dt"), py::arg("head_to_world"),
-          "Advance one frame of frame_dt seconds to the head's transform.")
+          "Advance one frame of frame_dt seconds to the head's transform. ValueError with the "
+          "reason when the frame is refused (more substeps than max_substeps) or the state "
+          "diverges; the positions then stay those of the last good frame, and the solver "
+          "steps again only after reset().")
+      .def_property_readonly("failure", [](const LcpSolver &self) { return self.failure(); },
+                             "Why the last step failed, or an empty string.")
+      .def(
+          "estimate_substeps",
+          [](const LcpSolver &self, const float frame_dt) {
+            if (!(frame_dt > 0.0f) || !std::isfinite(frame_dt)) {
+              fail("frame_dt must be a positive number of seconds");
+            }
+            const LcpSolver::SubstepEstimate estimate = self.estimate_substeps(frame_dt);
+            return py::make_tuple(estimate.count, estimate.reason);
+          },
+          py::arg("frame_dt"),
+          "(count, reason): the substeps a frame of frame_dt needs from the current state and "
+          "the bound that sets them; a count above params.max_substeps will be refused.")
       .def("reset", &LcpSolver::reset, py::call_guard<py::gil_scoped_release>())
       .def(
           "set_colliders",
           [](LcpSolver &self, const ColliderSet *colliders) {
-            if (colliders == nullptr) {
-              self.set_body_contact({});
-              return;
-            }
             /* Body collision (Bando 2003 §3.5) through the cylindrical / spherical maps. */
-            self.set_body_contact([colliders](const vec3 &p_wo, LcpContact &r_contact) {
-              Contact contact;
-              if (!colliders->find_contact(p_wo, contact)) {
-                return false;
-              }
-              r_contact.depth = contact.depth;
-              r_contact.normal_wo = contact.normal_wo;
-              r_contact.surface_point_wo = contact.surface_point_wo;
-              return true;
-            });
+            py::gil_scoped_release release;
+            self.set_colliders(colliders);
           },
           py::arg("colliders"), py::keep_alive<1, 2>(),
           "Collide with a ColliderSet (kept alive by the solver; its transforms must be at the "
@@ -271,6 +300,67 @@ void bind_lcp(py::module_ &m)
       .def_property_readonly("air_velocities", [](py::object self) {
         return float3_view(self.cast<LcpSolver &>().air_velocities(), self);
       });
+
+  py::class_<ParticleSkin>(
+      m, "ParticleSkin",
+      "LCP's motion on the groom's strands (Bando 2003, §4): each strand point follows the "
+      "particles nearest its (u, v, s), strands keep their segment lengths and are swung out "
+      "of the body.")
+      .def(py::init([](const py::handle groom, const py::handle solver,
+                       const py::handle head_matrix, const int neighbours_num) {
+             const Span<int32_t> offsets = as_int(groom.attr("curve_offsets"), "curve_offsets");
+             const Span<vec3> points = as_float3(groom.attr("positions_wo"), "positions_wo");
+             check_groom(offsets, points);
+             /* The particles: an LcpSolver, or anything with the same arrays. */
+             const py::object x_obj = solver.attr("positions"), t_obj = solver.attr("directions");
+             const py::object u_obj = solver.attr("u"), v_obj = solver.attr("v"),
+                              s_obj = solver.attr("s");
+             const Span<vec3> x = as_float3(x_obj, "positions"), t = as_float3(t_obj, "directions");
+             const Span<float> u = as_float(u_obj, "u"), v = as_float(v_obj, "v"),
+                               s = as_float(s_obj, "s");
+             if (x.is_empty() || t.size() != x.size() || u.size() != x.size() ||
+                 v.size() != x.size() || s.size() != x.size())
+             {
+               fail("the solver's positions, directions, u, v and s must have the same "
+                    "non-zero length");
+             }
+             if (neighbours_num < 1 || neighbours_num > 64) {
+               fail("neighbours_num must be between 1 and 64, not " +
+                    std::to_string(neighbours_num));
+             }
+             const mat4 head = as_head_matrix(head_matrix, "head_matrix");
+             py::gil_scoped_release release;
+             return new ParticleSkin(offsets, points, x, t, u, v, s, head, neighbours_num);
+           }),
+           py::arg("groom"), py::arg("solver"), py::arg("head_matrix"),
+           py::arg("neighbours_num") = 4,
+           "groom: any object with curve_offsets (C+1,) int32 and positions_wo (N, 3) float32 "
+           "at rest; solver: the LcpSolver at rest (or any object with its positions, "
+           "directions, u, v, s arrays); head_matrix: the head's 4x4 matrix then.")
+      .def(
+          "apply",
+          [](ParticleSkin &self, const py::handle particles_wo, const py::handle head_matrix,
+             const ColliderSet *colliders) {
+            const Span<vec3> x = as_float3(particles_wo, "particles_wo");
+            if (x.size() != self.particles_num()) {
+              fail("particles_wo must have one row per particle (" +
+                   std::to_string(self.particles_num()) + "), not " + std::to_string(x.size()));
+            }
+            const mat4 head = as_head_matrix(head_matrix, "head_matrix");
+            py::array_t<float> result({self.points_num(), int64_t(3)});
+            {
+              py::gil_scoped_release release;
+              self.apply(x, head, colliders,
+                         MutableSpan<vec3>(reinterpret_cast<vec3 *>(result.mutable_data()),
+                                           self.points_num()));
+            }
+            return result;
+          },
+          py::arg("particles_wo"), py::arg("head_matrix"), py::arg("colliders") = py::none(),
+          "Strand positions (N, 3) float32 for the particles' current world positions; "
+          "colliders (a ColliderSet, or None) keeps the points out of the body.")
+      .def_property_readonly("points_num", &ParticleSkin::points_num)
+      .def_property_readonly("particles_num", &ParticleSkin::particles_num);
 }
 
 }  // namespace hairdyn::bindings

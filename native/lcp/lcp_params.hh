@@ -49,10 +49,11 @@ struct LcpParams {
   float friction_damping = 10.0f; /* 1/s, d_f: damping of sliding hair (eq. 18). */
 
   /* ---- other forces (§3.5) ---- */
-  float gravity = 9.81f;      /* m/s², g: along world −Z (Blender is Z-up). */
+  /* m/s², g: world acceleration of gravity; the add-on fills it from the scene. */
+  vec3 gravity = vec3(0.0f, 0.0f, -9.81f);
   float air_friction = 2.0f;  /* 1/s: damping force −(this)·m·v against still air. */
-  float wind_speed = 0.0f;    /* m/s: free-stream speed of the air particles; 0 = no wind. */
-  float wind_heading = 0.0f;  /* rad: horizontal direction the wind blows to (0 = +X). */
+  /* The wind itself (speed, direction, turbulence) is core/wind.hh's WindParams, shared by
+   * every method, given to the solver apart: it is the free stream of the air particles. */
   float wind_particle_spacing = 0.03f; /* m: spacing of the SPH air particles. */
   float wind_drag = 20.0f;    /* 1/s, k_d: hair-air drag rate, both ways. */
   float air_density = 1.2f;   /* kg/m³: density of the air particles. */
@@ -60,6 +61,9 @@ struct LcpParams {
   /* Fewest time steps per frame: more are taken when the explicit pressure of eq. 16 (CFL)
    * or explicit springs need them. */
   int32_t substeps = 1;
+  /* Most time steps per frame: a frame whose stability bounds (the pressure's CFL, explicit
+   * springs) ask for more is refused with the reason, rather than running for minutes. */
+  int32_t max_substeps = 200;
 
   template<typename Fn> static void for_each_field(Fn &&fn)
   {
@@ -147,16 +151,11 @@ struct LcpParams {
     fn(&LcpParams::friction_damping,
        ParamInfo{"friction_damping", "d_f", "1/s", 0.0, 1e6,
                  "Frictional damping constant of eq. 18 (per unit SPH volume)"});
-    fn(&LcpParams::gravity, ParamInfo{"gravity", "g", "m/s²", 0.0, 1000.0,
-                                      "Gravity along world −Z (§3.5)"});
+    fn(&LcpParams::gravity, ParamInfo{"gravity", "g", "m/s²", -1000.0, 1000.0,
+                                      "Acceleration of gravity, world space (§3.5)"});
     fn(&LcpParams::air_friction,
        ParamInfo{"air_friction", "", "1/s", 0.0, 1e4,
                  "Air friction: damping force proportional to velocity (§3.5)"});
-    fn(&LcpParams::wind_speed, ParamInfo{"wind_speed", "", "m/s", 0.0, 100.0,
-                                         "Free-stream speed of the SPH wind (§3.5); 0 = none"});
-    fn(&LcpParams::wind_heading,
-       ParamInfo{"wind_heading", "", "rad", -7.0, 7.0,
-                 "Horizontal direction the wind blows to, from +X toward +Y"});
     fn(&LcpParams::wind_particle_spacing,
        ParamInfo{"wind_particle_spacing", "", "m", 1e-3, 1.0,
                  "Spacing (and smoothing length) of the air particles"});
@@ -172,6 +171,10 @@ struct LcpParams {
        ParamInfo{"substeps", "", "", 1, 1000,
                  "Fewest time steps per frame; more are taken as the hair-hair pressure (eq. 16) "
                  "or explicit springs need"});
+    fn(&LcpParams::max_substeps,
+       ParamInfo{"max_substeps", "", "", 1, 100000,
+                 "Most time steps per frame: a frame whose stability bounds (hair-hair pressure "
+                 "CFL, explicit springs) need more is refused with the reason"});
   }
 };
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 #include "core/parallel.hh"
 #include "core/sph_kernels.hh"
@@ -9,28 +11,43 @@
 
 namespace hairdyn {
 
-RigidTransform rigid_part(const mat4 &m)
+/* v turned about `omega` by the angle |omega| · scale (right hand). */
+static vec3 rotate_about(const vec3 &v, const vec3 &omega, const float scale)
 {
-  /* Gram-Schmidt on the columns removes scale and shear. */
-  const vec3 x = glm::normalize(vec3(m[0]));
-  const vec3 y = glm::normalize(vec3(m[1]) - glm::dot(vec3(m[1]), x) * x);
-  const vec3 z = glm::cross(x, y);
-  RigidTransform result;
-  result.rotation = glm::normalize(glm::quat_cast(mat3(x, y, z)));
-  result.translation = vec3(m[3]);
-  return result;
+  const float rate = glm::length(omega);
+  if (!(rate > 0.0f)) {
+    return v;
+  }
+  const vec3 axis = omega / rate;
+  const float angle = rate * scale;
+  const float c = std::cos(angle), sn = std::sin(angle);
+  return c * v + sn * glm::cross(axis, v) + (1.0f - c) * glm::dot(axis, v) * axis;
+}
+
+vec3 LcpSolver::transport_head(const HeadState &head, const vec3 &x)
+{
+  return glm::transpose(head.rotation) *
+         head.acceleration.transport(head.rotation * x + head.translation);
+}
+
+vec3 LcpSolver::fictitious_acceleration(const int64_t i) const
+{
+  const vec3 &x = x_head_[size_t(i)], &v = v_head_[size_t(i)];
+  return -transport_head(last_head_, x) - 2.0f * glm::cross(last_head_.omega_head, v);
 }
 
 LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
-                     const mat4 &head_to_world_rest)
+                     const mat4 &head_to_world_rest, const WindParams &wind)
     : params_(params),
-      head_rest_(rigid_part(head_to_world_rest)),
+      wind_params_(wind),
+      wind_(wind),
+      head_rest_(HeadPose::from_matrix(head_to_world_rest)),
       u_(particles_wo.u),
       v_(particles_wo.v),
       s_(particles_wo.s)
 {
   const int64_t n = particles_wo.size();
-  const mat3 to_head = glm::transpose(head_rest_.matrix());
+  const mat3 to_head = glm::transpose(head_rest_.rotation_matrix());
   x_rest_head_.resize(size_t(n));
   t_rest_head_.resize(size_t(n));
   is_root_.resize(size_t(n));
@@ -60,6 +77,7 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
 
   connections_ = build_connections(x_rest_head_, t_rest_head_, is_root_, params_.h1, params_.a0,
                                    params_.neighbor_num);
+  build_tethers();
   k_.resize(size_t(connections_.size()));
   alpha_k_.resize(size_t(connections_.size()));
   side_sums_.resize(size_t(2 * n));
@@ -75,17 +93,36 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
   reset();
 }
 
-void LcpSolver::set_body_contact(LcpContactQuery query)
+void LcpSolver::set_wind(const WindParams &wind)
+{
+  wind_params_ = wind;
+  wind_ = WindField(wind);
+  air_x_wo_.clear(); /* The air starts over in the new wind. */
+  air_v_wo_.clear();
+}
+
+void LcpSolver::set_colliders(const ColliderSet *colliders)
+{
+  if (colliders == nullptr) {
+    set_body_contact({});
+    return;
+  }
+  set_body_contact([colliders](const vec3 &p_wo, Contact &r_contact) {
+    return colliders->find_contact(p_wo, r_contact);
+  });
+}
+
+void LcpSolver::set_body_contact(ContactQuery query)
 {
   contact_query_ = std::move(query);
   if (!contact_query_) {
     return;
   }
-  const mat3 rotation = head_rest_.matrix();
+  const mat3 rotation = head_rest_.rotation_matrix();
   const mat3 to_head = glm::transpose(rotation);
   /* On the surface, a hair's breadth outside. */
   const auto out_of_body = [&](vec3 &x_head) {
-    LcpContact contact;
+    Contact contact;
     if (contact_query_(rotation * x_head + head_rest_.translation, contact)) {
       x_head = to_head * (contact.surface_point_wo + 1e-4f * contact.normal_wo -
                           head_rest_.translation);
@@ -102,9 +139,119 @@ void LcpSolver::set_body_contact(LcpContactQuery query)
   separate_close_particles(x_rest_head_, is_root_, rest_min_distance(), 20, out_of_body);
   connections_ = build_connections(x_rest_head_, t_rest_head_, is_root_, params_.h1, params_.a0,
                                    params_.neighbor_num);
+  build_tethers();
   k_.resize(size_t(connections_.size()));
   alpha_k_.resize(size_t(connections_.size()));
   reset();
+}
+
+/* Slack of the tethers over the hair's length: well above the stretch of the loose springs
+ * under gravity (a few percent at the default E), so that they only act on hair flung out. */
+static constexpr float tether_slack = 0.1f;
+
+void LcpSolver::build_tethers()
+{
+  const int64_t n = int64_t(x_rest_head_.size());
+  std::vector<int32_t> roots;
+  for (int64_t i = 0; i < n; i++) {
+    if (is_root_[size_t(i)]) {
+      roots.push_back(int32_t(i));
+    }
+  }
+  anchor_.assign(size_t(n), -1);
+  tether_length_.assign(size_t(n), 0.0f);
+  if (roots.empty()) {
+    return;
+  }
+  /* The root particle nearest in (u, v), the scalp point the hair grows from (eq. 3); the
+   * hair reaches the particle over s_i − s_r, or the straight distance if that is longer. */
+  parallel_for(n, 256, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      if (is_root_[size_t(i)]) {
+        anchor_[size_t(i)] = int32_t(i);
+        continue;
+      }
+      const vec2 uv(u_[size_t(i)], v_[size_t(i)]);
+      float best = std::numeric_limits<float>::max();
+      int32_t anchor = roots.front();
+      for (const int32_t r : roots) {
+        const vec2 d = vec2(u_[size_t(r)], v_[size_t(r)]) - uv;
+        const float dist_sq = glm::dot(d, d);
+        if (dist_sq < best) {
+          best = dist_sq;
+          anchor = r;
+        }
+      }
+      anchor_[size_t(i)] = anchor;
+      const float reach = std::max(s_[size_t(i)] - s_[size_t(anchor)],
+                                   glm::length(x_rest_head_[size_t(i)] - x_rest_head_[size_t(anchor)]));
+      tether_length_[size_t(i)] = (1.0f + tether_slack) * reach;
+    }
+  });
+}
+
+void LcpSolver::enforce_tethers()
+{
+  if (anchor_.empty() || anchor_.front() < 0) {
+    return;
+  }
+  parallel_for(int64_t(x_head_.size()), 1024, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      if (is_root_[size_t(i)]) {
+        continue;
+      }
+      const vec3 d = x_head_[size_t(i)] - x_head_[size_t(anchor_[size_t(i)])];
+      const float r = glm::length(d);
+      const float length = tether_length_[size_t(i)];
+      if (!(r > length)) {
+        continue;
+      }
+      /* Back onto the tether; the outward part of the velocity is lost (inelastic). */
+      const vec3 out = d / r;
+      x_head_[size_t(i)] -= (r - length) * out;
+      vec3 &v = v_head_[size_t(i)];
+      v -= std::max(0.0f, glm::dot(v, out)) * out;
+    }
+  });
+}
+
+/* m/s: no head motion gives hair this speed in the head's frame (a head teleported 100 m in a
+ * frame gives 2,400 m/s); a particle past it has run away. */
+static constexpr float runaway_speed = 1e4f;
+
+void LcpSolver::check_divergence(const int frame_substep)
+{
+  const int64_t n = int64_t(x_head_.size());
+  const int64_t none = n;
+  /* The first bad particle, the same on any thread count. */
+  const int64_t bad = parallel_reduce(
+      n, 4096, none,
+      [&](const IndexRange range) {
+        for (int64_t i = range.start; i < range.one_after_last(); i++) {
+          const vec3 &x = x_head_[size_t(i)], &v = v_head_[size_t(i)];
+          const float reach = glm::length(x - x_head_[size_t(std::max(anchor_[size_t(i)], 0))]);
+          const float speed = glm::length(v);
+          if (!std::isfinite(reach) || !std::isfinite(speed) || speed > runaway_speed ||
+              (anchor_[size_t(i)] >= 0 && reach > 2.0f * tether_length_[size_t(i)] + params_.h2))
+          {
+            return i;
+          }
+        }
+        return none;
+      },
+      [](const int64_t a, const int64_t b) { return std::min(a, b); });
+  if (bad == none) {
+    return;
+  }
+  const vec3 &x = x_head_[size_t(bad)], &v = v_head_[size_t(bad)];
+  char text[400];
+  std::snprintf(text, sizeof(text),
+                "LCP diverged at substep %d of the frame: particle %lld (s = %.3g m) is at "
+                "(%.3g, %.3g, %.3g) m with velocity (%.3g, %.3g, %.3g) m/s in the head's frame. "
+                "Lower the head's speed or raise the substeps.",
+                frame_substep, (long long)bad, double(s_[size_t(bad)]), double(x.x), double(x.y),
+                double(x.z), double(v.x), double(v.y), double(v.z));
+  failure_ = text;
 }
 
 void LcpSolver::reset()
@@ -113,102 +260,158 @@ void LcpSolver::reset()
   t_head_ = t_rest_head_;
   v_head_.assign(x_head_.size(), vec3(0.0f));
   head_ = head_rest_;
-  head_velocity_wo_ = vec3(0.0f);
-  head_omega_wo_ = vec3(0.0f);
+  head_velocity_ = HeadVelocity();
   air_x_wo_.clear();
   air_v_wo_.clear();
+  time_ = 0.0f;
   implicit_springs_.reset();
+  failure_.clear();
   compute_spring_coefficients(connections_, x_head_, cross_sections_, params_.h1,
                               params_.young_modulus, k_, alpha_k_, side_sums_);
   grid_.build(x_head_, 2.0f * params_.h2);
   find_neighbors(grid_, x_head_, 2.0f * params_.h2, true, neighbors_);
   compute_density(x_head_, masses_, neighbors_, params_.h2, density_);
   HeadState head;
-  head.rotation = head_.matrix();
+  head.rotation = head_.rotation_matrix();
   head.translation = head_.translation;
-  head.velocity_wo = head.omega_head = head.acceleration_head = vec3(0.0f);
-  head.angular_acceleration_head = vec3(0.0f);
+  head.acceleration.center = head.translation;
+  last_head_ = head;
   update_world_outputs(head);
   count_interpenetrations();
 }
 
-void LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
+/* s: the explicit pressure's CFL bound 0.6 h₂ / c, with the sound speed c = √(dP/dρ) = √k_a
+ * of eq. 16 (the Fig. 6 scene went unstable near 1.4 h₂ / c); infinite without pressure. */
+static float pressure_time_step(const LcpParams &params)
+{
+  if (!params.attraction_repulsion || !(params.pressure_stiffness > 0.0f)) {
+    return std::numeric_limits<float>::infinity();
+  }
+  return 0.6f * params.h2 / std::sqrt(params.pressure_stiffness);
+}
+
+/* Substeps of `dt_limit` in a frame, saturating far above any max_substeps. */
+static int substeps_for(const float frame_dt, const float dt_limit)
+{
+  return int(std::min(1e9, std::ceil(double(frame_dt) / double(dt_limit))));
+}
+
+/* s: explicit springs are stable below 1.8 / ω, ω² = 2 max_i Σ_j α_ij k_ij / m (Gershgorin
+ * bound; symplectic Euler is stable below 2 / ω); infinite when nothing is connected. */
+static float spring_time_step(const LcpConnections &connections, const Span<float> alpha_k,
+                              const Span<uint8_t> is_root, const float mass)
+{
+  const float omega = std::sqrt(2.0f * max_particle_stiffness(connections, alpha_k, is_root) / mass);
+  return std::isfinite(omega) && omega > 0.0f ? 1.8f / omega :
+                                                std::numeric_limits<float>::infinity();
+}
+
+LcpSolver::SubstepEstimate LcpSolver::estimate_substeps(const float frame_dt) const
+{
+  char text[300];
+  SubstepEstimate estimate{std::max(1, params_.substeps), "the substeps setting"};
+  const float dt_pressure = pressure_time_step(params_);
+  if (substeps_for(frame_dt, dt_pressure) > estimate.count) {
+    estimate.count = substeps_for(frame_dt, dt_pressure);
+    std::snprintf(text, sizeof(text),
+                  "the CFL bound of the hair-hair pressure (eq. 16), 0.6 h₂/√k_a = %.3g s: raise "
+                  "h₂ or lower k_a",
+                  double(dt_pressure));
+    estimate.reason = text;
+  }
+  if (!params_.implicit_springs) {
+    const float dt_springs = spring_time_step(connections_, alpha_k_, is_root_, mass_);
+    if (substeps_for(frame_dt, dt_springs) > estimate.count) {
+      estimate.count = substeps_for(frame_dt, dt_springs);
+      std::snprintf(text, sizeof(text),
+                    "the explicit springs' highest frequency (E = %.3g Pa), stable below %.3g s "
+                    "a step: turn implicit springs on or lower E",
+                    double(params_.young_modulus), double(dt_springs));
+      estimate.reason = text;
+    }
+  }
+  return estimate;
+}
+
+bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
 {
   assert(frame_dt > 0.0f);
-  const RigidTransform next = rigid_part(head_to_world);
-  glm::quat turn = next.rotation * glm::inverse(head_.rotation);
-  if (turn.w < 0.0f) {
-    turn = -turn;
+  if (!failure_.empty()) {
+    return false;
   }
-  /* The head's motion over this frame: constant velocities between the frame's transforms,
-   * and the change from the previous frame's velocities spread over the frame as the
-   * accelerations of the inertial forces (§3.5). */
-  const vec3 velocity_wo = (next.translation - head_.translation) / frame_dt;
-  const float angle = 2.0f * std::acos(std::min(turn.w, 1.0f));
-  const vec3 axis = vec3(turn.x, turn.y, turn.z);
-  const float axis_len = glm::length(axis);
-  const vec3 omega_wo = axis_len > 1e-12f ? axis / axis_len * (angle / frame_dt) : vec3(0.0f);
-  const vec3 acceleration_wo = (velocity_wo - head_velocity_wo_) / frame_dt;
-  const vec3 angular_acceleration_wo = (omega_wo - head_omega_wo_) / frame_dt;
-
+  const SubstepEstimate estimate = estimate_substeps(frame_dt);
+  if (estimate.count > params_.max_substeps) {
+    failure_ = "LCP refused the frame: it needs " + std::to_string(estimate.count) +
+               " substeps, more than max_substeps (" + std::to_string(params_.max_substeps) +
+               "), set by " + estimate.reason + ".";
+    return false;
+  }
+  /* The head's motion over this frame (core/head_motion.hh): constant velocities between
+   * the frame's poses, and their change since the last frame as the accelerations of the
+   * fictitious forces (§3.5). */
+  const HeadPose next = HeadPose::from_matrix(head_to_world);
+  const HeadVelocity velocity = HeadVelocity::between(head_, next, frame_dt);
+  const HeadAcceleration acceleration = HeadAcceleration::between(head_velocity_, velocity,
+                                                                  frame_dt);
   const auto head_at = [&](const float tau) {
+    const HeadPose pose = HeadPose::interpolate(head_, next, tau);
     HeadState state;
-    state.rotation = glm::mat3_cast(glm::slerp(head_.rotation, next.rotation, tau));
-    state.translation = glm::mix(head_.translation, next.translation, tau);
-    const mat3 to_head = glm::transpose(state.rotation);
-    state.velocity_wo = velocity_wo;
-    state.omega_head = to_head * omega_wo;
-    state.acceleration_head = to_head * acceleration_wo;
-    state.angular_acceleration_head = to_head * angular_acceleration_wo;
+    state.rotation = pose.rotation_matrix();
+    state.translation = pose.translation;
+    state.velocity_wo = velocity.linear;
+    state.omega_head = glm::transpose(state.rotation) * velocity.angular;
+    state.acceleration = acceleration;
+    state.acceleration.center = pose.translation;
     return state;
   };
 
-  if (params_.wind_speed > 0.0f) {
-    wind_box_ = wind_box_around(positions_wo_, params_.wind_heading,
+  if (has_wind()) {
+    wind_box_ = wind_box_around(positions_wo_, wind_params_.direction,
                                 3.0f * params_.wind_particle_spacing);
-    const vec3 wind_wo = wind_box_.axes_wo[0] * params_.wind_speed;
     if (air_x_wo_.empty()) {
-      fill_wind_box(wind_box_, params_.wind_particle_spacing, wind_wo, uint64_t(params_.seed),
-                    air_x_wo_, air_v_wo_);
+      fill_wind_box(wind_box_, params_.wind_particle_spacing, wind_, time_,
+                    uint64_t(params_.seed), air_x_wo_, air_v_wo_);
     }
-    wrap_air_particles(wind_box_, wind_wo, air_x_wo_, air_v_wo_);
+    wrap_air_particles(wind_box_, wind_, time_, air_x_wo_, air_v_wo_);
   }
 
   /* The frame is cut into at least `substeps` equal substeps, short enough for the explicit
-   * pressure's CFL bound 0.6 h₂ / c, with the sound speed c = √(dP/dρ) = √k_a of eq. 16
-   * (the Fig. 6 scene went unstable near 1.4 h₂ / c). Explicit springs also keep each
-   * substep below 1.8 / ω, ω² = 2 max_i Σ_j α_ij k_ij / m (Gershgorin bound; symplectic
-   * Euler is stable below 2 / ω); α grows as connections weaken, so ω is re-evaluated every
-   * substep. */
-  int substeps = std::max(1, params_.substeps);
-  if (params_.attraction_repulsion && params_.pressure_stiffness > 0.0f) {
-    const float dt_cfl = 0.6f * params_.h2 / std::sqrt(params_.pressure_stiffness);
-    substeps = std::max(substeps, int(std::ceil(frame_dt / dt_cfl)));
-  }
+   * pressure's CFL bound. Explicit springs also keep each substep below their stability
+   * bound; α grows as connections weaken, so that bound is re-evaluated every substep. */
+  const int substeps = std::max(std::max(1, params_.substeps),
+                                substeps_for(frame_dt, pressure_time_step(params_)));
   const float dt_max = frame_dt / float(substeps);
   float elapsed = 0.0f;
   substeps_used_ = 0;
   spring_iterations_ = 0;
-  while (elapsed < frame_dt * (1.0f - 1e-5f) && substeps_used_ < 100000) {
+  while (elapsed < frame_dt * (1.0f - 1e-5f)) {
+    if (substeps_used_ == params_.max_substeps) {
+      failure_ = "LCP stopped the frame after max_substeps (" +
+                 std::to_string(params_.max_substeps) +
+                 ") substeps: the explicit springs stiffened as the hair stretched. Turn "
+                 "implicit springs on or lower E.";
+      return false;
+    }
     compute_spring_coefficients(connections_, x_head_, cross_sections_, params_.h1,
                                 params_.young_modulus, k_, alpha_k_, side_sums_);
     float dt = std::min(dt_max, frame_dt - elapsed);
     if (!params_.implicit_springs) {
-      const float omega = std::sqrt(
-          2.0f * max_particle_stiffness(connections_, alpha_k_, is_root_) / mass_);
-      if (std::isfinite(omega) && omega > 0.0f) {
-        dt = std::min(dt, 1.8f / omega);
-      }
+      dt = std::min(dt, spring_time_step(connections_, alpha_k_, is_root_, mass_));
     }
     substep(dt, head_at((elapsed + 0.5f * dt) / frame_dt), head_at((elapsed + dt) / frame_dt));
     elapsed += dt;
+    time_ += dt;
     substeps_used_++;
+    check_divergence(substeps_used_);
+    if (!failure_.empty()) {
+      return false;
+    }
   }
   head_ = next;
-  head_velocity_wo_ = velocity_wo;
-  head_omega_wo_ = omega_wo;
+  head_velocity_ = velocity;
   update_world_outputs(head_at(1.0f));
   count_interpenetrations();
+  return true;
 }
 
 void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &end)
@@ -242,13 +445,14 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   interactions.friction_damping = params_.friction_damping;
   accumulate_hair_interactions(x_head_, v_head_, t_head_, masses_, density_, neighbors_,
                                interactions, forces_, damped_forces_, damping_);
-  if (params_.wind_speed > 0.0f) {
+  if (has_wind()) {
     accumulate_wind(dt, mid);
   }
 
   /* 4. Integrate in the head's frame. */
   const mat3 to_head = glm::transpose(mid.rotation);
-  const vec3 gravity_head = to_head * vec3(0.0f, 0.0f, -params_.gravity);
+  const vec3 gravity_head = to_head * params_.gravity;
+  last_head_ = mid;
   const vec3 frame_velocity_head = to_head * mid.velocity_wo;
   const vec3 &w = mid.omega_head;
   parallel_for(n, 1024, [&](const IndexRange range) {
@@ -259,11 +463,12 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
       const vec3 &x = x_head_[size_t(i)];
       vec3 &v = v_head_[size_t(i)];
       const float m = masses_[size_t(i)];
-      /* Inertial forces of the head's frame (§3.5): linear, Coriolis, centrifugal and
-       * angular acceleration. */
-      const vec3 inertial = -mid.acceleration_head - 2.0f * glm::cross(w, v) -
-                            glm::cross(w, glm::cross(w, x)) -
-                            glm::cross(mid.angular_acceleration_head, x);
+      /* Coriolis force of the head's frame (§3.5), dv/dt = −2 ω × v: exactly, v turned by
+       * −2|ω|Δt about ω (Rodrigues). */
+      v = rotate_about(v, w, -2.0f * dt);
+      /* The other fictitious forces: the transport acceleration (linear, angular and
+       * centrifugal) of core/head_motion.hh. */
+      const vec3 inertial = -transport_head(mid, x);
       const vec3 acceleration = forces_[size_t(i)] / m + gravity_head + inertial;
       /* Damping between particles (springs, eq. 17-18): the factor 2 bounds the damping of
        * relative velocities too (Gershgorin on Σc). */
@@ -286,7 +491,8 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
     }
   });
 
-  /* Body collisions after integration (§3.5). */
+  /* Hair keeps its length (the tethers), then body collisions after integration (§3.5). */
+  enforce_tethers();
   if (contact_query_) {
     collide_with_body(end);
   }
@@ -298,7 +504,6 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
 {
   const int64_t n = int64_t(x_head_.size());
   const float h = params_.wind_particle_spacing;
-  const vec3 wind_wo = wind_box_.axes_wo[0] * params_.wind_speed;
   /* Hair in world space. */
   parallel_for(n, 4096, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
@@ -323,9 +528,10 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
   find_neighbors(air_grid_, hair_x_wo_, 2.0f * h, false, hair_to_air_);
   find_neighbors(hair_grid_wo_, air_x_wo_, 2.0f * h, false, air_to_hair_);
 
-  /* SPH air: pressure with a sound speed of ten times the wind (weakly compressible), capped
-   * by the step's stability limit 0.4 h / Δt. */
-  const float sound_speed = std::min(10.0f * params_.wind_speed, 0.4f * h / dt);
+  /* SPH air: pressure with a sound speed of ten times the wind's fastest (weakly
+   * compressible), capped by the step's stability limit 0.4 h / Δt. */
+  const float fastest = wind_params_.speed * (1.0f + wind_params_.turbulence);
+  const float sound_speed = std::min(10.0f * fastest, 0.4f * h / dt);
   accumulate_air_pressure(air_x_wo_, air_mass, params_.air_density, sound_speed, h,
                           air_neighbors_, air_density_, air_forces_);
   /* Drag both ways (§3.5). */
@@ -348,7 +554,7 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
       air_x_wo_[size_t(j)] += dt * v;
     }
   });
-  wrap_air_particles(wind_box_, wind_wo, air_x_wo_, air_v_wo_);
+  wrap_air_particles(wind_box_, wind_, time_ + dt, air_x_wo_, air_v_wo_);
 }
 
 void LcpSolver::collide_with_body(const HeadState &end)
@@ -362,7 +568,7 @@ void LcpSolver::collide_with_body(const HeadState &end)
       vec3 &x = x_head_[size_t(i)];
       vec3 &v = v_head_[size_t(i)];
       vec3 p_wo = end.rotation * x + end.translation;
-      LcpContact contact;
+      Contact contact;
       if (!contact_query_(p_wo, contact)) {
         continue;
       }

@@ -8,13 +8,18 @@
 
 namespace hairdyn {
 
-WindBox wind_box_around(const Span<vec3> hair_positions_wo, const float heading,
+WindBox wind_box_around(const Span<vec3> hair_positions_wo, const vec3 &direction,
                         const float margin)
 {
   WindBox box;
-  const vec3 along(std::cos(heading), std::sin(heading), 0.0f);
-  const vec3 up(0.0f, 0.0f, 1.0f);
-  box.axes_wo = mat3(along, glm::cross(up, along), up);
+  const vec3 along = glm::normalize(direction);
+  /* Across: horizontal when the wind is not vertical. */
+  vec3 across = glm::cross(vec3(0.0f, 0.0f, 1.0f), along);
+  if (glm::length(across) < 1e-3f) {
+    across = glm::cross(vec3(0.0f, 1.0f, 0.0f), along);
+  }
+  across = glm::normalize(across);
+  box.axes_wo = mat3(along, across, glm::cross(along, across));
   const mat3 to_box = glm::transpose(box.axes_wo);
   box.lo = vec3(std::numeric_limits<float>::max());
   box.hi = -box.lo;
@@ -28,8 +33,8 @@ WindBox wind_box_around(const Span<vec3> hair_positions_wo, const float heading,
   return box;
 }
 
-void fill_wind_box(const WindBox &box, const float spacing, const vec3 &wind_wo,
-                   const uint64_t seed, std::vector<vec3> &r_positions,
+void fill_wind_box(const WindBox &box, const float spacing, const WindField &wind,
+                   const float time, const uint64_t seed, std::vector<vec3> &r_positions,
                    std::vector<vec3> &r_velocities)
 {
   std::mt19937_64 rng(seed);
@@ -44,13 +49,13 @@ void fill_wind_box(const WindBox &box, const float spacing, const vec3 &wind_wo,
         const vec3 q = box.lo + (vec3(float(x), float(y), float(z)) + 0.5f) * spacing +
                        vec3(jitter(rng), jitter(rng), jitter(rng));
         r_positions.push_back(box.axes_wo * q);
-        r_velocities.push_back(wind_wo);
+        r_velocities.push_back(wind.velocity_at(r_positions.back(), time));
       }
     }
   }
 }
 
-void wrap_air_particles(const WindBox &box, const vec3 &wind_wo,
+void wrap_air_particles(const WindBox &box, const WindField &wind, const float time,
                         const MutableSpan<vec3> r_positions, const MutableSpan<vec3> r_velocities)
 {
   const mat3 to_box = glm::transpose(box.axes_wo);
@@ -67,7 +72,7 @@ void wrap_air_particles(const WindBox &box, const vec3 &wind_wo,
       }
       r_positions[i] = box.axes_wo * q;
       if (fresh) {
-        r_velocities[i] = wind_wo;
+        r_velocities[i] = wind.velocity_at(r_positions[i], time);
       }
     }
   });

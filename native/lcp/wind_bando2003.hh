@@ -2,33 +2,40 @@
 /* Wind of Bando 2003, §3.5: the air is a set of SPH particles, coupled to the hair particles
  * by drag forces both ways, so the hair also slows the air (Hadap and Magnenat-Thalmann
  * 2001). Air lives in world space in a box around the hair that is periodic across the
- * wind: air leaving downstream comes back upstream as fresh free-stream air. */
+ * wind: air leaving downstream comes back upstream as fresh free-stream air, whose velocity
+ * is the shared wind field's (core/wind.hh: mean direction, speed, turbulence) where and when
+ * it enters. */
 #include <random>
 #include <vector>
 
 #include "core/math.hh"
+#include "core/wind.hh"
 #include "core/span.hh"
 #include "core/spatial_grid.hh"
 
 namespace hairdyn {
 
-/* The box of air, aligned with the wind: axis 0 along the wind, 1 across, 2 up (world Z). */
+/* The box of air, aligned with the wind: axis 0 along the wind, 1 and 2 across it (2 as near
+ * world Z as the wind allows). */
 struct WindBox {
   mat3 axes_wo{1.0f}; /* Columns: along, across, up. */
   vec3 lo{0.0f}, hi{0.0f}; /* In box coordinates. */
 };
 
-/* A box around `hair_positions_wo` padded by `margin`, for wind blowing along heading. */
-WindBox wind_box_around(Span<vec3> hair_positions_wo, float heading, float margin);
+/* A box around `hair_positions_wo` padded by `margin`, for wind blowing along `direction`
+ * (non-zero, world). */
+WindBox wind_box_around(Span<vec3> hair_positions_wo, const vec3 &direction, float margin);
 
-/* Air particles on a jittered lattice of `spacing` filling the box, moving with `wind_wo`. */
-void fill_wind_box(const WindBox &box, float spacing, const vec3 &wind_wo, uint64_t seed,
-                   std::vector<vec3> &r_positions, std::vector<vec3> &r_velocities);
+/* Air particles on a jittered lattice of `spacing` filling the box, moving with the wind
+ * field at `time`. */
+void fill_wind_box(const WindBox &box, float spacing, const WindField &wind, float time,
+                   uint64_t seed, std::vector<vec3> &r_positions, std::vector<vec3> &r_velocities);
 
 /* Periodic box: air that leaves across the wind re-enters on the other side; air that leaves
- * downstream (or upstream) re-enters at the opposite face with the free-stream velocity. */
-void wrap_air_particles(const WindBox &box, const vec3 &wind_wo, MutableSpan<vec3> r_positions,
-                        MutableSpan<vec3> r_velocities);
+ * downstream (or upstream) re-enters at the opposite face with the free-stream velocity, the
+ * wind field's there at `time`. */
+void wrap_air_particles(const WindBox &box, const WindField &wind, float time,
+                        MutableSpan<vec3> r_positions, MutableSpan<vec3> r_velocities);
 
 /* SPH pressure between air particles (Monaghan 1992), P = c² (ρ − ρ_air) ≥ 0, with the
  * density of eq. 1 (r_density is written). */
