@@ -42,7 +42,8 @@ std::vector<float> density_of(const GridFrame &grid, const Span<vec3> points)
   PointBins bins;
   bin_points(grid, points, bins);
   std::vector<float> density(static_cast<size_t>(grid.vertices_num()));
-  splat_density(grid, bins, density);
+  std::vector<float> scratch;
+  splat_density(grid, bins, density, scratch);
   return density;
 }
 

@@ -110,7 +110,8 @@ void bind_volume(py::module_ &m)
           PointBins bins;
           bin_points(grid, positions, bins);
           density.resize(size_t(grid.vertices_num()));
-          splat_density(grid, bins, density);
+          std::vector<float> scratch;
+          splat_density(grid, bins, density, scratch);
         }
         return py::make_tuple(grid_values(grid, density), matrix_rows(grid.grid_to_world()));
       },

@@ -85,20 +85,6 @@ float mean_segment_length(const Span<int32_t> curve_offsets, const Span<vec3> po
   return segments_num > 0 ? float(total / double(segments_num)) : 0.0f;
 }
 
-bool locate(const GridFrame &grid, const vec3 &p, ivec3 &r_cell, vec3 &r_fraction)
-{
-  if (!(p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= float(grid.size.x - 1) &&
-        p.y <= float(grid.size.y - 1) && p.z <= float(grid.size.z - 1)) ||
-      grid.cells_num() == 0)
-  {
-    return false;
-  }
-  /* A point on the last vertex plane belongs to the last cell, at fraction 1. */
-  r_cell = glm::min(ivec3(glm::floor(p)), grid.size - 2);
-  r_fraction = p - vec3(r_cell);
-  return true;
-}
-
 void bin_points(const GridFrame &grid, const Span<vec3> positions_wo, PointBins &r_bins)
 {
   const int64_t points_num = positions_wo.size();
@@ -115,30 +101,12 @@ void bin_points(const GridFrame &grid, const Span<vec3> positions_wo, PointBins 
                                       -1;
     }
   });
-  /* Counting sort, stable: the order within a cell is the point order. */
-  const int64_t cells_num = grid.cells_num();
-  r_bins.cell_start.assign(size_t(cells_num + 1), 0);
-  for (const int32_t cell : r_bins.cell_of) {
-    if (cell >= 0) {
-      r_bins.cell_start[size_t(cell) + 1]++;
-    }
-  }
-  for (int64_t c = 0; c < cells_num; c++) {
-    r_bins.cell_start[size_t(c + 1)] += r_bins.cell_start[size_t(c)];
-  }
-  r_bins.points.resize(size_t(r_bins.cell_start.back()));
-  std::vector<int32_t> fill(r_bins.cell_start.begin(), r_bins.cell_start.end() - 1);
-  for (int64_t i = 0; i < points_num; i++) {
-    const int32_t cell = r_bins.cell_of[size_t(i)];
-    if (cell >= 0) {
-      r_bins.points[size_t(fill[size_t(cell)]++)] = int32_t(i);
-    }
-  }
 }
 
-void splat_density(const GridFrame &grid, const PointBins &bins, const MutableSpan<float> r_density)
+void splat_density(const GridFrame &grid, const PointBins &bins, const MutableSpan<float> r_density,
+                   std::vector<float> &scratch)
 {
-  splat_to_grid<float>(grid, bins, [](int32_t) { return 1.0f; }, r_density);
+  splat_to_grid<float>(grid, bins, [](int64_t) { return 1.0f; }, r_density, scratch);
 }
 
 template<typename T>

@@ -10,9 +10,9 @@
  * of that lattice around the hair. Grids of equal spacing therefore share vertices, and values
  * move between them by an integer offset.
  *
- * Splatting is a gather: points are sorted by cell (stable, by index), and each vertex sums the
- * points of its 8 adjacent cells in that order, so the result has the same bits on any thread
- * count. */
+ * Splatting sums each vertex's terms in an order that does not depend on the threads (see
+ * splat_to_grid), so the result has the same bits on any thread count. */
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -84,66 +84,89 @@ GridFrame grid_around(const HeadBox &box, float cell_size, int margin, const mat
 /* Mean length of the segments of the strands (m), 0 for no segments. */
 float mean_segment_length(Span<int32_t> curve_offsets, Span<vec3> positions);
 
-/* Points sorted by grid cell. Points outside the grid (or not finite) are in no cell. */
+/* Points located in a grid. Points outside it (or not finite) are in no cell. */
 struct PointBins {
-  std::vector<vec3> coords;         /* per point: grid coordinates */
-  std::vector<int32_t> cell_of;     /* per point: cell index, or -1 outside */
-  std::vector<int32_t> cell_start;  /* per cell c: its points are points[cell_start[c] ..
-                                       cell_start[c + 1]) */
-  std::vector<int32_t> points;      /* point indices, by cell, ascending within a cell */
+  std::vector<vec3> coords;     /* per point: grid coordinates */
+  std::vector<int32_t> cell_of; /* per point: cell index, or -1 outside */
 };
+
+/* Points per chunk of a splat, and most chunks: set by the point count alone. */
+constexpr int64_t splat_chunk_points = 32768;
+constexpr int64_t max_splat_chunks = 4;
 
 void bin_points(const GridFrame &grid, Span<vec3> positions_wo, PointBins &r_bins);
 
-/* eq. 1's tent weight of a point at grid coordinates `p` for the vertex at `v`. */
-inline float tent_weight(const vec3 &p, const vec3 &v)
-{
-  const vec3 d = glm::abs(p - v);
-  return (1.0f - d.x) * (1.0f - d.y) * (1.0f - d.z);
-}
-
-/* r_grid[v] = Σ_i tent(P_i, v) · value_of(i) over the binned points (eq. 1 with a value per
- * point; value_of(i) ≡ 1 is the density). */
+/* r_grid[v] = Σ_i tent(P_i, v) · value_of(i) over the located points (eq. 1 with a value per
+ * point; value_of(i) ≡ 1 is the density): each point adds its tent weights to its cell's 8
+ * corners. The points are cut into chunks by their count alone (never by the thread count);
+ * each chunk splats in point order into its own grid (the first into r_grid, the others into
+ * `scratch`), and the chunks' grids are summed in chunk order: same bits on any thread count. */
 template<typename T, typename ValueFn>
 void splat_to_grid(const GridFrame &grid, const PointBins &bins, const ValueFn &value_of,
-                   MutableSpan<T> r_grid)
+                   MutableSpan<T> r_grid, std::vector<T> &scratch)
 {
-  const ivec3 n = grid.size;
-  parallel_for(n.z, 1, [&](const IndexRange slices) {
-    for (int k = int(slices.start); k < int(slices.one_after_last()); k++) {
-      for (int j = 0; j < n.y; j++) {
-        for (int i = 0; i < n.x; i++) {
-          const vec3 vertex = vec3(float(i), float(j), float(k));
-          T sum(0.0f);
-          for (int ck = k - 1; ck <= k; ck++) {
-            for (int cj = j - 1; cj <= j; cj++) {
-              for (int ci = i - 1; ci <= i; ci++) {
-                if (ci < 0 || cj < 0 || ck < 0 || ci >= n.x - 1 || cj >= n.y - 1 ||
-                    ck >= n.z - 1) {
-                  continue;
-                }
-                const int64_t cell = grid.cell_index(ci, cj, ck);
-                for (int32_t slot = bins.cell_start[size_t(cell)];
-                     slot < bins.cell_start[size_t(cell) + 1]; slot++)
-                {
-                  const int32_t point = bins.points[size_t(slot)];
-                  sum += tent_weight(bins.coords[size_t(point)], vertex) * value_of(point);
-                }
-              }
-            }
-          }
-          r_grid[grid.vertex_index(i, j, k)] = sum;
+  const int64_t points_num = int64_t(bins.cell_of.size());
+  const int64_t vertices_num = grid.vertices_num();
+  const int64_t chunks_num = std::clamp<int64_t>(
+      (points_num + splat_chunk_points - 1) / splat_chunk_points, 1, max_splat_chunks);
+  const int64_t chunk_size = (points_num + chunks_num - 1) / chunks_num;
+  scratch.resize(size_t((chunks_num - 1) * vertices_num));
+  const int64_t dy = grid.size.x, dz = int64_t(grid.size.x) * grid.size.y;
+  parallel_for(chunks_num, 1, [&](const IndexRange chunks) {
+    for (int64_t chunk = chunks.start; chunk < chunks.one_after_last(); chunk++) {
+      T *out = chunk == 0 ? r_grid.data() : scratch.data() + (chunk - 1) * vertices_num;
+      std::fill(out, out + vertices_num, T(0.0f));
+      const int64_t end = std::min(points_num, (chunk + 1) * chunk_size);
+      for (int64_t i = chunk * chunk_size; i < end; i++) {
+        if (bins.cell_of[size_t(i)] < 0) {
+          continue;
+        }
+        const vec3 p = bins.coords[size_t(i)];
+        const ivec3 cell = glm::min(ivec3(glm::floor(p)), grid.size - 2);
+        const vec3 f = p - vec3(cell);
+        const T value = value_of(i);
+        const float wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
+        T *base = out + grid.vertex_index(cell.x, cell.y, cell.z);
+        for (int c = 0; c < 4; c++) {
+          const T row = (wy[c & 1] * wz[c >> 1]) * value;
+          T *at = base + (c & 1) * dy + (c >> 1) * dz;
+          at[0] += (1.0f - f.x) * row;
+          at[1] += f.x * row;
         }
       }
     }
   });
+  if (chunks_num > 1) {
+    parallel_for(vertices_num, 8192, [&](const IndexRange range) {
+      for (int64_t v = range.start; v < range.one_after_last(); v++) {
+        T sum = r_grid[v];
+        for (int64_t chunk = 1; chunk < chunks_num; chunk++) {
+          sum += scratch[size_t((chunk - 1) * vertices_num + v)];
+        }
+        r_grid[v] = sum;
+      }
+    });
+  }
 }
 
-/* eq. 1: the density of the binned points. */
-void splat_density(const GridFrame &grid, const PointBins &bins, MutableSpan<float> r_density);
+/* eq. 1: the density of the located points. */
+void splat_density(const GridFrame &grid, const PointBins &bins, MutableSpan<float> r_density,
+                   std::vector<float> &scratch);
 
-/* The cell holding grid coordinates `p` and the fractions within it; false outside. */
-bool locate(const GridFrame &grid, const vec3 &p, ivec3 &r_cell, vec3 &r_fraction);
+/* The cell holding grid coordinates `p` and the fractions within it; false outside. A point on
+ * the last vertex plane belongs to the last cell, at fraction 1. */
+inline bool locate(const GridFrame &grid, const vec3 &p, ivec3 &r_cell, vec3 &r_fraction)
+{
+  if (!(p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= float(grid.size.x - 1) &&
+        p.y <= float(grid.size.y - 1) && p.z <= float(grid.size.z - 1)) ||
+      grid.cells_num() == 0)
+  {
+    return false;
+  }
+  r_cell = glm::min(ivec3(glm::floor(p)), grid.size - 2);
+  r_fraction = p - vec3(r_cell);
+  return true;
+}
 
 /* Trilinear interpolation of vertex values at grid coordinates `p` (the tent weights of eq. 1
  * read back); T(0) outside the grid. */

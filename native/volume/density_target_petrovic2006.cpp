@@ -79,7 +79,8 @@ void DensityTarget::density_on(const GridFrame &grid, const MutableSpan<float> r
     PointBins bins;
     bin_points(level->grid, positions_head_, bins);
     level->density.resize(size_t(level->grid.vertices_num()));
-    splat_density(level->grid, bins, level->density);
+    std::vector<float> scratch;
+    splat_density(level->grid, bins, level->density, scratch);
   }
   copy_between_grids(level->grid, level->density, grid, r_density);
 }
@@ -91,7 +92,7 @@ double target_error(const GridFrame &grid, const PointBins &bins, DensityTarget 
   grids.density.resize(vertices_num);
   grids.target.resize(vertices_num);
   grids.difference.resize(vertices_num);
-  splat_density(grid, bins, grids.density);
+  splat_density(grid, bins, grids.density, grids.scratch);
   target.density_on(grid, grids.target);
   return density_difference(grids.density, grids.target, grids.difference);
 }

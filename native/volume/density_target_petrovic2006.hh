@@ -59,6 +59,7 @@ struct TargetGrids {
   std::vector<float> density;
   std::vector<float> target;
   std::vector<float> difference;
+  std::vector<float> scratch;
 };
 
 /* E of eq. 3 between `positions_wo` (binned on `grid` in `bins`) and `target`; leaves D_s,

@@ -224,8 +224,8 @@ HairShell::HairShell(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
   PointBins bins;
   bin_points(grid_, rest_positions_wo, bins);
   density_.resize(size_t(grid_.vertices_num()));
-  splat_density(grid_, bins, density_);
   std::vector<float> scratch;
+  splat_density(grid_, bins, density_, scratch);
   blur_binomial(grid_.size, params.shell_blur, MutableSpan<float>(density_), scratch);
   distance_.resize(density_.size());
   signed_distance_fast_sweeping(grid_.size, grid_.cell_size, density_, params.shell_threshold,

@@ -16,7 +16,8 @@ void grid_velocities_at_points(const GridFrame &grid, const PointBins &bins,
   const MutableSpan<vec4> md(grids.momentum_density);
   /* §5.1: Σ w v and eq. 1's Σ w at each vertex, in one gather. */
   splat_to_grid<vec4>(
-      grid, bins, [&](const int32_t i) { return vec4(velocities[i], 1.0f); }, md);
+      grid, bins, [&](const int64_t i) { return vec4(velocities[i], 1.0f); }, md,
+      grids.scratch4);
   grids.density_max = 0.0f;
   for (const vec4 &m : grids.momentum_density) {
     grids.density_max = std::max(grids.density_max, m.w);

@@ -87,7 +87,7 @@ void VolumePass::apply(const SubstepState &state)
   else {
     std::vector<float> &density = target_grids_.density;
     density.resize(size_t(grid.vertices_num()));
-    splat_density(grid, bins_, density);
+    splat_density(grid, bins_, density, target_grids_.scratch);
     density_max_ = max_value(density);
   }
 
