@@ -7,7 +7,7 @@
 #include <random>
 
 #include "core/parallel.hh"
-#include "strands/strand_dynamics_kurihara1993.hh"
+#include "strands/strand_solver.hh"
 #include "volume/volume_pass.hh"
 
 using namespace hairdyn;
@@ -84,8 +84,9 @@ static void BM_StrandSubstep(benchmark::State &state)
   BenchGroom groom;
   StrandParams params;
   params.substeps = 1;
-  params.wind_speed = 2.0f;
-  StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), {}, params);
+  WindParams wind;
+  wind.speed = 2.0f;
+  StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), {}, params, wind);
   int substep = 0;
   for (auto _ : state) {
     const float t = float(substep++) / 96.0f;

@@ -182,7 +182,7 @@ void bind_volume(py::module_ &m)
       py::arg("head_to_world_rest") = py::none(), py::arg("params") = VolumeParams(),
       "The hair-shell normals N = ∇S (Petrovic 2006, eq. 2) at the rest points: (N, 3) float32.");
 
-  py::class_<VolumePass>(
+  py::class_<VolumePass, SubstepPass>(
       m, "VolumePass",
       "Velocity smoothing (Petrovic 2006, §5.1) and density targeting (§5.2, eq. 3) on a grid "
       "fixed to the head, run after every substep of the strand solver.")

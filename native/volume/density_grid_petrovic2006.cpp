@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "groom/groom.hh"
-#include "strands/head_motion.hh"
+#include "core/head_motion.hh"
 
 namespace hairdyn {
 
@@ -26,7 +26,7 @@ mat4 GridFrame::grid_to_world() const
 HeadBox head_box(const Span<vec3> positions_wo, const mat4 &world_to_head)
 {
   return parallel_reduce(
-      positions_wo.size(), 4096, HeadBox(),
+      positions_wo.size(), point_grain, HeadBox(),
       [&](const IndexRange range) {
         HeadBox box;
         for (int64_t i = range.start; i < range.one_after_last(); i++) {
@@ -90,7 +90,7 @@ void bin_points(const GridFrame &grid, const Span<vec3> positions_wo, PointBins 
   const int64_t points_num = positions_wo.size();
   r_bins.coords.resize(size_t(points_num));
   r_bins.cell_of.resize(size_t(points_num));
-  parallel_for(points_num, 4096, [&](const IndexRange range) {
+  parallel_for(points_num, point_grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       const vec3 p = grid.to_grid(positions_wo[i]);
       ivec3 cell;
@@ -128,7 +128,7 @@ void blur_binomial(const ivec3 &size, const int radius, const MutableSpan<T> val
     const int64_t stride = strides[axis];
     const int length = size[axis];
     std::copy(values.begin(), values.end(), scratch.begin());
-    parallel_for(values.size(), 4096, [&](const IndexRange range) {
+    parallel_for(values.size(), grid_grain, [&](const IndexRange range) {
       for (int64_t v = range.start; v < range.one_after_last(); v++) {
         const int at = int((v / stride) % length);
         T sum(0.0f);
@@ -151,7 +151,7 @@ void copy_between_grids(const GridFrame &from, const Span<float> values, const G
                         const MutableSpan<float> r_values)
 {
   const ivec3 offset = to.origin - from.origin;
-  parallel_for(to.size.z, 1, [&](const IndexRange slices) {
+  parallel_for(to.size.z, slab_grain(to.size), [&](const IndexRange slices) {
     for (int k = int(slices.start); k < int(slices.one_after_last()); k++) {
       for (int j = 0; j < to.size.y; j++) {
         for (int i = 0; i < to.size.x; i++) {
@@ -169,7 +169,7 @@ void copy_between_grids(const GridFrame &from, const Span<float> values, const G
 float max_value(const Span<float> values)
 {
   return parallel_reduce(
-      values.size(), 16384, 0.0f,
+      values.size(), grid_grain, 0.0f,
       [&](const IndexRange range) {
         float m = 0.0f;
         for (int64_t i = range.start; i < range.one_after_last(); i++) {

@@ -27,6 +27,16 @@ namespace hairdyn {
  * smallest power-of-two multiple of the cell size that fits. */
 constexpr int64_t max_grid_vertices = int64_t(1) << 22;
 
+/* Grain sizes of the parallel loops: below these, a loop runs on one thread (a parallel region
+ * costs more than small grids and grooms need). Grids are cut in z-slabs of about
+ * grid_grain vertices. */
+constexpr int64_t point_grain = 8192;
+constexpr int64_t grid_grain = 32768;
+inline int64_t slab_grain(const ivec3 &size)
+{
+  return std::max<int64_t>(1, grid_grain / std::max<int64_t>(1, int64_t(size.x) * size.y));
+}
+
 /* The rotation and translation of `head_to_world` (its scale dropped): grids are in meters. */
 mat4 rigid_head_to_world(const mat4 &head_to_world);
 
@@ -137,7 +147,7 @@ void splat_to_grid(const GridFrame &grid, const PointBins &bins, const ValueFn &
     }
   });
   if (chunks_num > 1) {
-    parallel_for(vertices_num, 8192, [&](const IndexRange range) {
+    parallel_for(vertices_num, grid_grain, [&](const IndexRange range) {
       for (int64_t v = range.start; v < range.one_after_last(); v++) {
         T sum = r_grid[v];
         for (int64_t chunk = 1; chunk < chunks_num; chunk++) {
@@ -203,7 +213,7 @@ template<typename Fn>
 void for_each_free_point(Span<int32_t> curve_offsets, const int64_t points_num, const Fn &fn)
 {
   if (curve_offsets.is_empty()) {
-    parallel_for(points_num, 4096, [&](const IndexRange range) {
+    parallel_for(points_num, point_grain, [&](const IndexRange range) {
       for (int64_t i = range.start; i < range.one_after_last(); i++) {
         fn(i);
       }

@@ -7,7 +7,7 @@ namespace hairdyn {
 double density_difference(const Span<float> density, const Span<float> target,
                           const MutableSpan<float> r_difference)
 {
-  const double twice_energy = parallel_sum(density.size(), 16384, [&](const IndexRange range) {
+  const double twice_energy = parallel_sum(density.size(), grid_grain, [&](const IndexRange range) {
     double sum = 0.0;
     for (int64_t v = range.start; v < range.one_after_last(); v++) {
       const float d = density[v] - target[v];
@@ -22,7 +22,7 @@ double density_difference(const Span<float> density, const Span<float> target,
 void density_forces(const GridFrame &grid, const PointBins &bins, const Span<float> difference,
                     const MutableSpan<vec3> r_forces)
 {
-  parallel_for(r_forces.size(), 4096, [&](const IndexRange range) {
+  parallel_for(r_forces.size(), point_grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       ivec3 cell;
       vec3 f;

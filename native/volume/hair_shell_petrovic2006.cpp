@@ -30,7 +30,7 @@ void signed_distance_fast_sweeping(const ivec3 &size, const float cell_size,
 
   /* Vertices next to the shell (an edge to a neighbour crosses phi = 0): one Newton step of
    * phi = density − threshold onto its zero set, with phi's central-difference gradient. */
-  parallel_for(size.z, 1, [&](const IndexRange slices) {
+  parallel_for(size.z, slab_grain(size), [&](const IndexRange slices) {
     for (int k = int(slices.start); k < int(slices.one_after_last()); k++) {
       for (int j = 0; j < size.y; j++) {
         for (int i = 0; i < size.x; i++) {
@@ -107,7 +107,7 @@ void signed_distance_fast_sweeping(const ivec3 &size, const float cell_size,
     }
     return value;
   };
-  parallel_for(vertices_num, 4096, [&](const IndexRange range) {
+  parallel_for(vertices_num, grid_grain, [&](const IndexRange range) {
     for (int64_t v = range.start; v < range.one_after_last(); v++) {
       vec3 &c = closest[size_t(v)];
       if (std::isnan(c.x)) {
@@ -138,7 +138,7 @@ void signed_distance_fast_sweeping(const ivec3 &size, const float cell_size,
   });
 
   /* S in meters, negative inside the hair (§4.1). */
-  parallel_for(vertices_num, 16384, [&](const IndexRange range) {
+  parallel_for(vertices_num, grid_grain, [&](const IndexRange range) {
     for (int64_t v = range.start; v < range.one_after_last(); v++) {
       const vec3 x(float(v % size.x), float((v / size.x) % size.y), float(v / strides[2]));
       const vec3 &c = closest[size_t(v)];
@@ -155,7 +155,7 @@ void shell_normals_at(const GridFrame &grid, const Span<float> distance,
   const ivec3 n = grid.size;
   /* ∇S at the vertices by central differences (one-sided on the border), per grid unit. */
   std::vector<vec3> gradient(static_cast<size_t>(grid.vertices_num()));
-  parallel_for(n.z, 1, [&](const IndexRange slices) {
+  parallel_for(n.z, slab_grain(n), [&](const IndexRange slices) {
     for (int k = int(slices.start); k < int(slices.one_after_last()); k++) {
       for (int j = 0; j < n.y; j++) {
         for (int i = 0; i < n.x; i++) {
@@ -177,7 +177,7 @@ void shell_normals_at(const GridFrame &grid, const Span<float> distance,
     }
   });
   const mat3 rotation(grid.head_to_world);
-  parallel_for(positions_wo.size(), 4096, [&](const IndexRange range) {
+  parallel_for(positions_wo.size(), point_grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       const vec3 g = rotation * sample_grid(grid, Span<vec3>(gradient), grid.to_grid(positions_wo[i]));
       const float length = glm::length(g);
@@ -194,7 +194,7 @@ void shell_normals_at(const GridFrame &grid, const Span<float> distance,
 void transport_frames(const Span<int32_t> curve_offsets, const Span<vec3> positions_wo,
                       const Span<mat3> root_frames_wo, const MutableSpan<mat3> r_frames_wo)
 {
-  parallel_for(curve_offsets.size() - 1, 256, [&](const IndexRange range) {
+  parallel_for(curve_offsets.size() - 1, 512, [&](const IndexRange range) {
     for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
       const IndexRange points = curve_points(curve_offsets, curve);
       mat3 frame = root_frames_wo[curve];
@@ -245,7 +245,7 @@ HairShell::HairShell(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
   std::vector<mat3> frames(static_cast<size_t>(points_num));
   transport_frames(curve_offsets, rest_positions_wo, root_frames_wo, frames);
   local_normals_.resize(size_t(points_num));
-  parallel_for(points_num, 4096, [&](const IndexRange range) {
+  parallel_for(points_num, point_grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       local_normals_[size_t(i)] = glm::transpose(frames[size_t(i)]) * rest_normals_[size_t(i)];
     }
@@ -266,7 +266,7 @@ void HairShell::transport(const Span<vec3> positions_wo, const mat4 &head_to_wor
   }
   std::vector<mat3> frames(static_cast<size_t>(positions_wo.size()));
   transport_frames(curve_offsets_, positions_wo, root_frames_wo, frames);
-  parallel_for(positions_wo.size(), 4096, [&](const IndexRange range) {
+  parallel_for(positions_wo.size(), point_grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       r_normals_wo[i] = frames[size_t(i)] * local_normals_[size_t(i)];
     }

@@ -25,7 +25,7 @@ void grid_velocities_at_points(const GridFrame &grid, const PointBins &bins,
   /* B M and B D. */
   blur_binomial(grid.size, filter_radius, md, grids.scratch4);
   const MutableSpan<vec3> v_grid(grids.velocity);
-  parallel_for(vertices_num, 4096, [&](const IndexRange range) {
+  parallel_for(vertices_num, grid_grain, [&](const IndexRange range) {
     for (int64_t v = range.start; v < range.one_after_last(); v++) {
       const vec4 m = md[v];
       v_grid[v] = m.w > 0.0f ? vec3(m) / m.w : vec3(0.0f);
@@ -33,7 +33,7 @@ void grid_velocities_at_points(const GridFrame &grid, const PointBins &bins,
   });
   /* B V, read back with the tent weights. */
   blur_binomial(grid.size, filter_radius, v_grid, grids.scratch3);
-  parallel_for(velocities.size(), 4096, [&](const IndexRange range) {
+  parallel_for(velocities.size(), point_grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       r_grid_velocities[i] = bins.cell_of[size_t(i)] < 0 ?
                                  velocities[i] :
