@@ -177,3 +177,17 @@ def test_density_grid_as_openvdb(tmp_path):
     volume.filepath = path
     volume.grids.load()
     assert [g.name for g in volume.grids] == ["density"]
+
+
+def test_pass_runs_inside_the_strand_solver():
+    """Registered with the solver, the pass runs after every substep and the solver times it."""
+    offsets, positions = wavy_groom()
+    solver = _native.StrandSolver(offsets, positions, np.eye(4))
+    volume = _native.VolumePass(_native.VolumeParams(smoothing=0.5))
+    solver.add_pass(volume)
+    for _ in range(3):
+        solver.step(1 / 24, np.eye(4))
+    assert volume.substeps_num == 3 * solver.params.substeps
+    assert solver.pass_ms("volume") > 0.0
+    assert volume.density_max > 0.0
+    assert np.isfinite(solver.positions).all()
