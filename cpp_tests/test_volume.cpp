@@ -296,7 +296,7 @@ TEST(VolumeShell, BallNormalsAreRadial)
    * over 3 cells so that the shell is the ball's and not the chords' sampling pattern. */
   ball_of_strands(center, radius, 0.004f, 0.004f, offsets, positions);
   VolumeParams params;
-  params.cell_size = 0.0125f;
+  params.shell_cell_size = 0.0125f;
   params.shell_threshold = 8.0f;
   params.shell_blur = 3;
   const HairShell shell(offsets, positions, mat4(1.0f), params);
@@ -355,6 +355,8 @@ TEST(VolumeShell, TransportFollowsRigidMotion)
     worst = std::max(worst, glm::length(normals[i] - mat3(motion) * shell.rest_normals()[int64_t(i)]));
   }
   EXPECT_LT(worst, 1e-4f);
+  std::printf("transported normals against the rotated rest normals: largest difference %.2e\n",
+              worst);
   /* At the rest pose the transport gives the rest normals back. */
   shell.transport(rest, head_rest, normals);
   for (size_t i = 0; i < rest.size(); i++) {

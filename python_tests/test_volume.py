@@ -114,7 +114,7 @@ def test_targeting_lowers_the_error_of_eq3():
 def test_shell_normals_are_radial_and_follow_rigid_motion():
     center = np.array([0.0, 0.0, 1.0])
     offsets, positions = ball(center)
-    params = _native.VolumeParams(cell_size=0.008, shell_threshold=2.0, shell_blur=3)
+    params = _native.VolumeParams(shell_cell_size=0.008, shell_threshold=2.0, shell_blur=3)
     shell = _native.HairShell(offsets, positions, None, params)
     radial = positions - center
     distance = np.linalg.norm(radial, axis=1)

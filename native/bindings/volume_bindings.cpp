@@ -77,7 +77,7 @@ std::unique_ptr<HairShell> make_shell(const py::handle curve_offsets,
   if (!(densest > params.shell_threshold)) {
     fail("No part of the hair reaches the shell threshold (" +
          std::to_string(params.shell_threshold) + " nodes per grid vertex; the densest vertex has " +
-         std::to_string(densest) + "): lower shell_threshold or raise cell_size");
+         std::to_string(densest) + "): lower shell_threshold or raise shell_cell_size");
   }
   return shell;
 }

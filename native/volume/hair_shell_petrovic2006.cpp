@@ -213,10 +213,10 @@ HairShell::HairShell(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
 {
   const mat4 head_to_world = rigid_head_to_world(head_to_world_rest);
   const mat4 world_to_head = glm::inverse(head_to_world);
-  const float cell_size = params.cell_size > 0.0f ?
-                              params.cell_size :
-                              std::max(mean_segment_length(curve_offsets, rest_positions_wo),
-                                       min_segment_length);
+  const float cell_size = params.shell_cell_size > 0.0f ?
+                              params.shell_cell_size :
+                              4.0f * std::max(mean_segment_length(curve_offsets, rest_positions_wo),
+                                              min_segment_length);
   /* Room outside the hair for the blurred density to fall below the threshold. */
   grid_ = grid_around(head_box(rest_positions_wo, world_to_head), cell_size,
                       params.shell_blur + 2, head_to_world);

@@ -25,8 +25,11 @@ struct VolumeParams {
   /* Refine to the next finer level once eq. 3's error on the current level is below this
    * share of its value when the level began (or stops falling). */
   float target_refine = 0.5f;
+  /* m: the spacing of the shell's grid (§4.1). 0 picks 4 × the mean segment length, which
+   * closes the shell over a groom of guide strands a few segment lengths apart. */
+  float shell_cell_size = 0.0f;
   /* Density (nodes per grid vertex, eq. 1) of the iso-surface that is the hair shell (§4.1). */
-  float shell_threshold = 1.0f;
+  float shell_threshold = 0.5f;
   /* Cells, radius of the binomial filter applied to the density before the shell is built. */
   int32_t shell_blur = 2;
 
@@ -58,6 +61,12 @@ struct VolumeParams {
        ParamInfo{"target_refine", "", "", 0.0, 1.0,
                  "Refine the targeting grid when the error of eq. 3 falls below this share of "
                  "its value at the level's start (Petrovic 2006, §5.2)"});
+    fn(&VolumeParams::shell_cell_size,
+       ParamInfo{"shell_cell_size", "", "m", 0.0, 1.0,
+                 "Spacing of the hair shell's grid (Petrovic 2006, §4.1); 0 uses 4 × the mean "
+                 "segment length"}
+           .shown_as(100.0, "cm")
+           .soft(0.0, 0.2));
     fn(&VolumeParams::shell_threshold,
        ParamInfo{"shell_threshold", "", "", 1e-3, 1e4,
                  "Density (nodes per grid vertex, eq. 1) of the hair shell's iso-surface "
