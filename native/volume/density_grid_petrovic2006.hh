@@ -31,7 +31,7 @@ constexpr int64_t max_grid_vertices = int64_t(1) << 22;
  * costs more than small grids and grooms need). Grids are cut in z-slabs of about
  * grid_grain vertices. */
 constexpr int64_t point_grain = 8192;
-constexpr int64_t grid_grain = 32768;
+constexpr int64_t grid_grain = 131072;
 inline int64_t slab_grain(const ivec3 &size)
 {
   return std::max<int64_t>(1, grid_grain / std::max<int64_t>(1, int64_t(size.x) * size.y));
