@@ -1,0 +1,56 @@
+#include "volume/velocity_smoothing_petrovic2006.hh"
+
+#include <algorithm>
+
+#include "core/parallel.hh"
+
+namespace hairdyn {
+
+void grid_velocities_at_points(const GridFrame &grid, const PointBins &bins,
+                               const Span<vec3> velocities, const int filter_radius,
+                               VelocityGrids &grids, const MutableSpan<vec3> r_grid_velocities)
+{
+  const int64_t vertices_num = grid.vertices_num();
+  grids.momentum_density.resize(size_t(vertices_num));
+  grids.velocity.resize(size_t(vertices_num));
+  const MutableSpan<vec4> md(grids.momentum_density);
+  /* §5.1: Σ w v and eq. 1's Σ w at each vertex, in one gather. */
+  splat_to_grid<vec4>(
+      grid, bins, [&](const int64_t i) { return vec4(velocities[i], 1.0f); }, md,
+      grids.scratch4);
+  grids.density_max = 0.0f;
+  for (const vec4 &m : grids.momentum_density) {
+    grids.density_max = std::max(grids.density_max, m.w);
+  }
+  /* B M and B D. */
+  blur_binomial(grid.size, filter_radius, md, grids.scratch4);
+  const MutableSpan<vec3> v_grid(grids.velocity);
+  parallel_for(vertices_num, grid_grain, [&](const IndexRange range) {
+    for (int64_t v = range.start; v < range.one_after_last(); v++) {
+      const vec4 m = md[v];
+      v_grid[v] = m.w > 0.0f ? vec3(m) / m.w : vec3(0.0f);
+    }
+  });
+  /* B V, read back with the tent weights. */
+  blur_binomial(grid.size, filter_radius, v_grid, grids.scratch3);
+  parallel_for(velocities.size(), point_grain, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      r_grid_velocities[i] = bins.cell_of[size_t(i)] < 0 ?
+                                 velocities[i] :
+                                 sample_grid(grid, Span<vec3>(v_grid), bins.coords[size_t(i)]);
+    }
+  });
+}
+
+void drag_toward(const Span<vec3> grid_velocities, const float strength, const float h,
+                 const Span<int32_t> curve_offsets, const MutableSpan<vec3> positions,
+                 const MutableSpan<vec3> velocities)
+{
+  for_each_free_point(curve_offsets, velocities.size(), [&](const int64_t i) {
+    const vec3 dv = strength * (grid_velocities[i] - velocities[i]);
+    velocities[i] += dv;
+    positions[i] += h * dv;
+  });
+}
+
+}  // namespace hairdyn

@@ -1,0 +1,51 @@
+#pragma once
+/* Hair–hair interaction by velocity smoothing (Petrovic, Henne and Anderson 2006, §5.1).
+ *
+ * The node velocities are averaged on the density grid,
+ *
+ *   V_xyz = Σ_i (1 − |P_x^i − x|)(1 − |P_y^i − y|)(1 − |P_z^i − z|) v^i / D_xyz,
+ *
+ * smoothed by a filter kernel on the grid, and every node is dragged toward the grid velocity
+ * at its position: v^i ← v^i + s (V(P^i) − v^i).
+ *
+ * The filter is the binomial kernel B (symmetric, weights summing to 1), applied on both sides
+ * of the average: to the momentum and density before dividing (V = B M / B D) and to the
+ * averaged velocity before it is read back at the nodes with the same tent weights W. The map
+ * from node velocities to the grid velocity at the nodes is then T = W B diag(1 / B D) B Wᵀ:
+ * symmetric, positive semidefinite, and its eigenvalues are at most 1 (D⁻¹(WB)ᵀWB has
+ * non-negative entries and row sums ≤ 1). Hence, with equal node masses,
+ *   - the drag v ← (1 − s) v + s T v never adds kinetic energy for s ∈ [0, 1] (the paper's
+ *     "will always lead to the dissipation of energy"), the filter keeping the grid's total
+ *     mass and momentum;
+ *   - a uniform velocity field passes unchanged (B M = v₀ B D wherever B D > 0). */
+#include <vector>
+
+#include "core/math.hh"
+#include "core/span.hh"
+#include "volume/density_grid_petrovic2006.hh"
+
+namespace hairdyn {
+
+/* Scratch grids of the smoothing, kept between substeps to avoid reallocation. */
+struct VelocityGrids {
+  std::vector<vec4> momentum_density; /* (Σ w v, Σ w) per vertex, then filtered */
+  std::vector<vec3> velocity;         /* V per vertex, then filtered */
+  std::vector<vec4> scratch4;
+  std::vector<vec3> scratch3;
+  float density_max = 0.0f; /* eq. 1's largest value on the grid, before filtering */
+};
+
+/* Per point, the smoothed grid velocity T v at its position; a point outside the grid keeps
+ * its own velocity. `bins` must hold the points of `velocities` binned on `grid`. */
+void grid_velocities_at_points(const GridFrame &grid, const PointBins &bins,
+                               Span<vec3> velocities, int filter_radius, VelocityGrids &grids,
+                               MutableSpan<vec3> r_grid_velocities);
+
+/* §5.1's drag: v ← v + s (V − v) for every point except the roots of `curve_offsets` (empty:
+ * every point); the positions move by h times the change of velocity, as if the drag had
+ * acted through the substep of length h. */
+void drag_toward(Span<vec3> grid_velocities, float strength, float h,
+                 Span<int32_t> curve_offsets, MutableSpan<vec3> positions,
+                 MutableSpan<vec3> velocities);
+
+}  // namespace hairdyn
