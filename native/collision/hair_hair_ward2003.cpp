@@ -30,7 +30,7 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
     for (int32_t p = curve_offsets[c]; p < curve_offsets[c + 1]; p++) {
       g.point_curve[size_t(p)] = int32_t(c);
       if (p + 1 < curve_offsets[c + 1]) {
-        g.segments.push_back(p);
+        g.segments.push_back({vec3(0.0f), vec3(0.0f), ivec3(0), p, int32_t(c), 0.0f});
       }
     }
   }
@@ -38,10 +38,6 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   if (segments_num == 0) {
     return false;
   }
-  g.radii.resize(size_t(segments_num));
-  g.box_min.resize(size_t(segments_num));
-  g.box_max.resize(size_t(segments_num));
-  g.cell_min.resize(size_t(segments_num));
   g.entry_offsets.resize(size_t(segments_num) + 1);
 
   /* The cell edge: the mean segment length (§5.3), never so small that the cell indices of
@@ -49,7 +45,7 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   const double length_sum = parallel_sum(segments_num, 4096, [&](const IndexRange range) {
     double sum = 0.0;
     for (int64_t k = range.start; k < range.one_after_last(); k++) {
-      const int32_t p = g.segments[size_t(k)];
+      const int32_t p = g.segments[size_t(k)].point;
       sum += double(glm::length(positions[p + 1] - positions[p]));
     }
     return sum;
@@ -68,15 +64,16 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
 
   parallel_for(segments_num, 2048, [&](const IndexRange range) {
     for (int64_t k = range.start; k < range.one_after_last(); k++) {
-      const int32_t p = g.segments[size_t(k)];
+      SegmentGridScratch::Segment &seg = g.segments[size_t(k)];
+      const int32_t p = seg.point;
       const float r = radii.is_empty() ? default_radius : 0.5f * (radii[p] + radii[p + 1]);
-      g.radii[size_t(k)] = r;
+      seg.radius = r;
       const vec3 a = positions[p] - lo, b = positions[p + 1] - lo;
-      g.box_min[size_t(k)] = glm::min(a, b) - vec3(r);
-      g.box_max[size_t(k)] = glm::max(a, b) + vec3(r);
-      const ivec3 c0 = ivec3(glm::floor(g.box_min[size_t(k)] * inv_cell));
-      const ivec3 c1 = ivec3(glm::floor(g.box_max[size_t(k)] * inv_cell));
-      g.cell_min[size_t(k)] = c0;
+      seg.box_min = glm::min(a, b) - vec3(r);
+      seg.box_max = glm::max(a, b) + vec3(r);
+      const ivec3 c0 = ivec3(glm::floor(seg.box_min * inv_cell));
+      const ivec3 c1 = ivec3(glm::floor(seg.box_max * inv_cell));
+      seg.cell_min = c0;
       const ivec3 n = c1 - c0 + ivec3(1);
       g.entry_offsets[size_t(k) + 1] = int64_t(n.x) * n.y * n.z;
     }
@@ -89,8 +86,8 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   g.entry_cells.resize(size_t(entries_num));
   parallel_for(segments_num, 2048, [&](const IndexRange range) {
     for (int64_t k = range.start; k < range.one_after_last(); k++) {
-      const ivec3 c0 = g.cell_min[size_t(k)];
-      const ivec3 c1 = ivec3(glm::floor(g.box_max[size_t(k)] * inv_cell));
+      const ivec3 c0 = g.segments[size_t(k)].cell_min;
+      const ivec3 c1 = ivec3(glm::floor(g.segments[size_t(k)].box_max * inv_cell));
       int64_t e = g.entry_offsets[size_t(k)];
       for (int32_t z = c0.z; z <= c1.z; z++) {
         for (int32_t y = c0.y; y <= c1.y; y++) {
@@ -127,6 +124,40 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
       g.sorted_entries[slot] = int32_t(k);
       g.sorted_cells[slot] = entry_cell;
     }
+  }
+  /* Within a bucket, by the lower x of the boxes (sweep and prune along x, ties by segment). */
+  parallel_for(int64_t(buckets_num), 4096, [&](const IndexRange range) {
+    std::vector<std::pair<float, uint32_t>> order;
+    std::vector<int32_t> entries;
+    std::vector<ivec3> cells;
+    for (int64_t b = range.start; b < range.one_after_last(); b++) {
+      const uint32_t begin = g.bucket_offsets[size_t(b)], end = g.bucket_offsets[size_t(b) + 1];
+      if (end - begin < 2) {
+        continue;
+      }
+      order.clear();
+      for (uint32_t e = begin; e < end; e++) {
+        order.push_back({g.segments[size_t(g.sorted_entries[e])].box_min.x, e});
+      }
+      std::sort(order.begin(), order.end(), [&](const auto &p, const auto &q) {
+        return p.first < q.first ||
+               (p.first == q.first && g.sorted_entries[p.second] < g.sorted_entries[q.second]);
+      });
+      entries.resize(order.size());
+      cells.resize(order.size());
+      for (size_t i = 0; i < order.size(); i++) {
+        entries[i] = g.sorted_entries[order[i].second];
+        cells[i] = g.sorted_cells[order[i].second];
+      }
+      std::copy(entries.begin(), entries.end(), g.sorted_entries.begin() + begin);
+      std::copy(cells.begin(), cells.end(), g.sorted_cells.begin() + begin);
+    }
+  });
+  g.sorted_max_x.resize(size_t(entries_num));
+  g.sorted_min_x.resize(size_t(entries_num));
+  for (int64_t e = 0; e < entries_num; e++) {
+    g.sorted_min_x[size_t(e)] = g.segments[size_t(g.sorted_entries[size_t(e)])].box_min.x;
+    g.sorted_max_x[size_t(e)] = g.segments[size_t(g.sorted_entries[size_t(e)])].box_max.x;
   }
   return true;
 }
@@ -169,35 +200,34 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
             const uint32_t begin = g.bucket_offsets[size_t(b)], end = g.bucket_offsets[size_t(b) + 1];
             for (uint32_t x = begin; x < end; x++) {
               const ivec3 cell = g.sorted_cells[x];
-              const int32_t i = g.sorted_entries[x];
-              const int32_t pi = g.segments[size_t(i)];
-              for (uint32_t y = x + 1; y < end; y++) {
+              const int32_t i0 = g.sorted_entries[x];
+              const float max_x = g.sorted_max_x[x];
+              for (uint32_t y = x + 1; y < end && g.sorted_min_x[y] <= max_x; y++) {
                 if (g.sorted_cells[y] != cell) {
                   continue;
                 }
-                const int32_t j = g.sorted_entries[y];
+                const int32_t i = std::min(i0, g.sorted_entries[y]);
+                const int32_t j = std::max(i0, g.sorted_entries[y]);
+                const SegmentGridScratch::Segment &si = g.segments[size_t(i)];
+                const SegmentGridScratch::Segment &sj = g.segments[size_t(j)];
                 /* Each pair once: in the first cell both touch. */
-                if (glm::max(g.cell_min[size_t(i)], g.cell_min[size_t(j)]) != cell) {
+                if (glm::max(si.cell_min, sj.cell_min) != cell) {
                   continue;
                 }
-                const int32_t pj = g.segments[size_t(j)];
-                if (g.point_curve[size_t(pi)] == g.point_curve[size_t(pj)] &&
-                    (different_strands_only || pj - pi <= 1))
-                {
+                const int32_t pi = si.point, pj = sj.point;
+                if (si.curve == sj.curve && (different_strands_only || pj - pi <= 1)) {
                   continue;
                 }
                 tested++;
-                const vec3 &min_i = g.box_min[size_t(i)], &max_i = g.box_max[size_t(i)];
-                const vec3 &min_j = g.box_min[size_t(j)], &max_j = g.box_max[size_t(j)];
-                if (max_i.x < min_j.x || max_j.x < min_i.x || max_i.y < min_j.y ||
-                    max_j.y < min_i.y || max_i.z < min_j.z || max_j.z < min_i.z)
+                if (si.box_max.y < sj.box_min.y || sj.box_max.y < si.box_min.y ||
+                    si.box_max.z < sj.box_min.z || sj.box_max.z < si.box_min.z)
                 {
                   continue;
                 }
                 /* §5.3: overlap = d − (r1 + r2). */
                 const CoreDistance core = segment_segment_distance(
                     positions[pi], positions[pi + 1], positions[pj], positions[pj + 1]);
-                const float overlap = core.distance - g.radii[size_t(i)] - g.radii[size_t(j)];
+                const float overlap = core.distance - si.radius - sj.radius;
                 if (overlap < 0.0f) {
                   out.push_back({pi, pj, core, overlap});
                 }

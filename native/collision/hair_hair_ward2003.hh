@@ -40,22 +40,28 @@ struct SegmentContact {
 /* Reusable buffers of the segment grid. */
 struct SegmentGridScratch {
   std::vector<int32_t> point_curve;      /* per point: its strand */
-  std::vector<int32_t> segments;         /* first point of each segment */
-  std::vector<float> radii;              /* per segment */
-  std::vector<vec3> box_min, box_max;    /* per segment: its LSS's bounding box */
-  std::vector<ivec3> cell_min;           /* per segment: first cell it touches */
+  /* Per segment, together for the pair loop's memory accesses. */
+  struct Segment {
+    vec3 box_min, box_max; /* its LSS's bounding box (relative to the groom's lower corner) */
+    ivec3 cell_min;        /* the first cell it touches */
+    int32_t point;         /* its first point */
+    int32_t curve;
+    float radius;
+  };
+  std::vector<Segment> segments;
   std::vector<int64_t> entry_offsets;    /* per segment: its first grid entry */
   std::vector<ivec3> entry_cells;        /* per entry: the cell */
   std::vector<uint32_t> bucket_offsets;  /* counting sort by hashed cell */
   std::vector<int32_t> sorted_entries;   /* segment index per entry, bucket by bucket */
   std::vector<ivec3> sorted_cells;
+  std::vector<float> sorted_min_x, sorted_max_x; /* per entry: its box's x range */
   std::vector<uint32_t> fill;
   std::vector<std::vector<SegmentContact>> chunk_contacts;
   /* The response's per-node sums of corrections and of their weights. */
   std::vector<vec3> dx, dv;
   std::vector<float> wx, wv;
   float cell_size = 0.0f;
-  int64_t candidate_pairs_num = 0; /* pairs sharing a cell (the grid's work) */
+  int64_t candidate_pairs_num = 0; /* pairs sharing a cell whose boxes overlap along x */
 };
 
 /* Every pair of segments whose LSSs intersect (overlap < 0), but a strand's neighbouring
