@@ -159,6 +159,20 @@ void expect_consistent(const CoreDistance &r, const double seg_to_a, const doubl
 constexpr int pairs_num = 100000;
 constexpr double tolerance = 1e-6; /* × the scale of the inputs (1) */
 
+/* |computed − reference| for a segment against a convex polygon (corners); every 97th case
+ * also checks that the closest points lie on the segment and the polygon. */
+double segment_polygon_error(const int i, const std::pair<vec3, vec3> &seg, const CoreDistance &r,
+                             const std::vector<dvec3> &corners)
+{
+  const double ref = ref_segment_set(
+      seg.first, seg.second, [&](const dvec3 &p) { return ref_point_polygon(p, corners); });
+  if (i % 97 == 0) {
+    expect_consistent(r, ref_point_segment(d(r.point_a), d(seg.first), d(seg.second)),
+                      ref_point_polygon(d(r.point_b), corners));
+  }
+  return std::abs(double(r.distance) - ref);
+}
+
 }  // namespace
 
 TEST(SsvDistances, SegmentSegmentMatchesBruteForce)
@@ -198,15 +212,8 @@ TEST(SsvDistances, SegmentRectangleMatchesBruteForce)
       seg.second = rect.corner + 2.0f * random.uniform(random.rng) * rect.edge_u +
                    2.0f * random.uniform(random.rng) * rect.edge_v;
     }
-    const std::vector<dvec3> corners = rect_corners(rect);
     const CoreDistance r = segment_rectangle_distance(seg.first, seg.second, rect);
-    const double ref = ref_segment_set(
-        seg.first, seg.second, [&](const dvec3 &p) { return ref_point_polygon(p, corners); });
-    worst = std::max(worst, std::abs(double(r.distance) - ref));
-    if (i % 97 == 0) {
-      expect_consistent(r, ref_point_segment(d(r.point_a), d(seg.first), d(seg.second)),
-                        ref_point_polygon(d(r.point_b), corners));
-    }
+    worst = std::max(worst, segment_polygon_error(i, seg, r, rect_corners(rect)));
   }
   EXPECT_LE(worst, tolerance);
 }
@@ -225,15 +232,8 @@ TEST(SsvDistances, SegmentTriangleMatchesBruteForce)
       seg.first = inside + random.point();
       seg.second = 2.0f * inside - seg.first;
     }
-    const std::vector<dvec3> corners{d(t0), d(t1), d(t2)};
     const CoreDistance r = segment_triangle_distance(seg.first, seg.second, t0, t1, t2);
-    const double ref = ref_segment_set(
-        seg.first, seg.second, [&](const dvec3 &p) { return ref_point_polygon(p, corners); });
-    worst = std::max(worst, std::abs(double(r.distance) - ref));
-    if (i % 97 == 0) {
-      expect_consistent(r, ref_point_segment(d(r.point_a), d(seg.first), d(seg.second)),
-                        ref_point_polygon(d(r.point_b), corners));
-    }
+    worst = std::max(worst, segment_polygon_error(i, seg, r, {d(t0), d(t1), d(t2)}));
   }
   EXPECT_LE(worst, tolerance);
 }

@@ -12,7 +12,7 @@
 
 #include "collision/hair_hair_ward2003.hh"
 #include "core/parallel.hh"
-#include "strands/strand_dynamics_kurihara1993.hh"
+#include "strands/strand_solver.hh"
 
 using namespace hairdyn;
 

@@ -1,7 +1,6 @@
 /* Bindings of the swept-sphere collision of Ward & Lin 2003 §5: the parameters, the hair–hair
  * and hair–object substep passes, and the report measures (crossings, segment penetration). */
 #include <cmath>
-#include <memory>
 
 #include "bindings/arrays.hh"
 #include "bindings/params.hh"
@@ -94,13 +93,13 @@ void bind_ssv(py::module_ &m)
       "Share (0..1) of segments with a point deeper than tolerance (scene units) inside any "
       "collider of the set, by the exact mesh distance.");
 
-  py::class_<HairHairPass, std::shared_ptr<HairHairPass>>(
+  /* SubstepPass is bound by strands_bindings (bind_strands runs first): StrandSolver.add_pass
+   * takes these. */
+  py::class_<HairHairPass, SubstepPass>(
       m, "HairHairPass",
       "Hair-hair collision (Ward & Lin 2003 section 5.3), run by the strand solver after every "
       "substep; does nothing while params.hair_hair is off.")
-      .def(py::init([](const SweptSphereParams &params) {
-             return std::make_shared<HairHairPass>(params);
-           }),
+      .def(py::init([](const SweptSphereParams &params) { return new HairHairPass(params); }),
            py::arg("params") = SweptSphereParams())
       .def_property(
           "params", [](const HairHairPass &self) { return self.params(); },
@@ -112,14 +111,14 @@ void bind_ssv(py::module_ &m)
           "pushed_num, averaged_num, candidates_num (pairs sharing a cell), ms.")
       .def("reset_stats", &HairHairPass::reset_stats);
 
-  py::class_<SsvObjectPass, std::shared_ptr<SsvObjectPass>>(
+  py::class_<SsvObjectPass, SubstepPass>(
       m, "SsvObjectPass",
       "Hair-object collision of every segment's swept sphere against a BVH of swept spheres "
       "over each collider (Ward & Lin 2003 section 5.4); acts while params.body_collision is "
       "swept spheres or both.")
       .def(py::init([](const ColliderSet &colliders, const SweptSphereParams &params) {
              py::gil_scoped_release release;
-             return std::make_shared<SsvObjectPass>(&colliders, params);
+             return new SsvObjectPass(&colliders, params);
            }),
            py::arg("colliders"), py::arg("params") = SweptSphereParams(), py::keep_alive<1, 2>())
       .def_property(

@@ -169,13 +169,31 @@ Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const Ssv
     push.direction = away / d;
     push.need = r - d;
   }
-  else if (d <= 0.0f) {
-    push.direction = n;
-    push.need = r;
-  }
+  /* A segment through the triangle's edge (d = 0) pierces a neighbour's face: that face's
+   * prism gives its push. */
   push.s = contact.core.s;
   return push;
 }
+
+/* The contacts of one segment: the deepest decides whether it is inside and how its velocity
+ * is restricted; each iteration removes the shallowest penetration (a segment through a thin
+ * body near its edge leaves it across the edge, not through its far face). */
+struct Candidates {
+  bool any = false;
+  Push deepest;
+  Push shallowest; /* of the penetrating ones (need > 0) */
+
+  void add(const Push &push)
+  {
+    any = true;
+    if (push.need > deepest.need) {
+      deepest = push;
+    }
+    if (push.need > 0.0f && (!(shallowest.need > 0.0f) || push.need < shallowest.need)) {
+      shallowest = push;
+    }
+  }
+};
 
 /* The tip of segment a–b (length kept) turned about a so that its point at push.s rises by
  * push.need along push.direction, to first order: the tip moves across the segment, along the
@@ -290,11 +308,9 @@ void SsvObjectPass::apply(const SubstepState &state)
             Push deepest_wo;
             for (int iteration = 0; iteration <= iterations_num; iteration++) {
               const vec3 b = x[k + 1];
-              deepest_wo = Push{};
               /* Faces met from behind count only when no face within reach was met from the
                * front (the segment was inside before: it still goes out along the normal). */
-              Push behind_wo;
-              bool any_front = false;
+              Candidates front, behind;
               for (size_t i = 0; i < bodies_.size(); i++) {
                 const Frame &f = frames[i];
                 const vec3 a_o = transform_point(f.world_to_object, a);
@@ -311,17 +327,15 @@ void SsvObjectPass::apply(const SubstepState &state)
                   const bool from_front =
                       glm::dot(p_before_o - t[0], bodies_[i].bvh.normal(contact.triangle)) >= -r_o;
                   const Push push = push_out_of_triangle(a_o, b_o, r_o, bodies_[i].bvh, contact);
-                  any_front = any_front || from_front;
-                  Push &best = from_front ? deepest_wo : behind_wo;
-                  if (push.need * f.scale > best.need) {
-                    best = {push.need * f.scale, glm::normalize(f.direction_to_world * push.direction),
-                            push.s};
+                  if (push.need > -std::numeric_limits<float>::infinity()) {
+                    (from_front ? front : behind)
+                        .add({push.need * f.scale,
+                              glm::normalize(f.direction_to_world * push.direction), push.s});
                   }
                 }
               }
-              if (!any_front) {
-                deepest_wo = behind_wo;
-              }
+              const Candidates &used = front.any ? front : behind;
+              deepest_wo = used.deepest;
               if (!(deepest_wo.need > 0.0f)) {
                 resolved = true;
                 break;
@@ -332,7 +346,7 @@ void SsvObjectPass::apply(const SubstepState &state)
               /* §5.4: push the segment out along the normal by its penetration; its base is
                * placed, so its tip turns about it (a little past, to stop on the surface). */
               pushed = true;
-              x[k + 1] = turn_out(a, b, length, deepest_wo);
+              x[k + 1] = turn_out(a, b, length, used.shallowest);
             }
             local.pushed += pushed ? 1 : 0;
             local.unresolved += resolved ? 0 : 1;

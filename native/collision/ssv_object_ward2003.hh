@@ -16,7 +16,9 @@
  *   against a face, the normal of the face and the depth of the segment's deepest point over
  *   it (so a segment that pierces a thin body is lifted whole out of it); against an edge or a
  *   corner, along the closest-point vector. The segment's tip turns about its base (already
- *   placed) until no contact is left (a few iterations), which keeps the length exactly;
+ *   placed) until no contact is left (a few iterations, each removing the shallowest
+ *   penetration: a segment through a thin body near its edge leaves across the edge), which
+ *   keeps the length exactly;
  * - a face counts only when the segment was on its front side at the substep's start (x − h v
  *   against the collider's previous pose): the far side of a thin body does not pull the
  *   segment through it; when no face within reach was met from the front (the segment was
