@@ -18,4 +18,5 @@ PYBIND11_MODULE(_native, m)
   bind_strands(m);
   bind_lcp(m);
   bind_volume(m);
+  bind_ssv(m);
 }

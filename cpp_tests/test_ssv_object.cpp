@@ -1,0 +1,203 @@
+/* Hair–object collision of Ward & Lin 2003 §5.4 on fixed states: the BVH of swept spheres
+ * returns exactly the triangles a brute-force search returns, and the pass pushes segments out
+ * of bodies (even a segment through a thin blade whose nodes are both outside), keeps their
+ * lengths, stops the velocity into the body and applies friction. */
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+#include <set>
+
+#include "collision/ssv_object_ward2003.hh"
+#include "collision_test_shapes.hh"
+
+using namespace hairdyn;
+
+namespace {
+
+std::shared_ptr<Collider> make_collider(const test::TestMesh &shape, const mat4 &object_to_world)
+{
+  const ColliderMesh mesh(shape.vertices, shape.triangles);
+  auto collider = std::make_shared<Collider>(mesh, Span<int32_t>(), Span<int32_t>(),
+                                             CollisionParams());
+  collider->set_transform(object_to_world);
+  return collider;
+}
+
+/* Smallest core distance of segment a–b to any triangle of the collider (world space). */
+float segment_mesh_distance(const Collider &collider, const vec3 &a, const vec3 &b)
+{
+  float best = INFINITY;
+  const mat4 &m = collider.object_to_world();
+  for (const ivec3 &t : collider.triangles()) {
+    const vec3 t0 = transform_point(m, collider.vertices()[t.x]);
+    const vec3 t1 = transform_point(m, collider.vertices()[t.y]);
+    const vec3 t2 = transform_point(m, collider.vertices()[t.z]);
+    best = std::min(best, segment_triangle_distance(a, b, t0, t1, t2).distance);
+  }
+  return best;
+}
+
+struct Strand {
+  std::vector<int32_t> offsets{0};
+  std::vector<vec3> positions, velocities;
+  SubstepState state(const float h)
+  {
+    SubstepState s;
+    s.h = h;
+    s.curve_offsets = offsets;
+    s.positions_wo = positions;
+    s.velocities_wo = velocities;
+    return s;
+  }
+};
+
+}  // namespace
+
+TEST(SsvObject, HierarchyReturnsTheBruteForceTriangles)
+{
+  const test::TestMesh sphere = test::uv_sphere(0.1f, 32, 16);
+  const SsvBVH bvh(sphere.vertices, sphere.triangles);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-0.15f, 0.15f);
+  int64_t found_total = 0;
+  for (int q = 0; q < 300; q++) {
+    const vec3 a(u(rng), u(rng), u(rng));
+    const vec3 b = a + 0.2f * vec3(u(rng), u(rng), u(rng));
+    const float reach = 0.01f;
+    std::vector<TriangleContact> contacts;
+    bvh.segment_contacts(a, b, reach, contacts);
+    std::set<int32_t> found, reference;
+    for (const TriangleContact &c : contacts) {
+      found.insert(c.triangle);
+    }
+    for (size_t t = 0; t < sphere.triangles.size(); t++) {
+      const ivec3 tri = sphere.triangles[t];
+      if (segment_triangle_distance(a, b, sphere.vertices[tri.x], sphere.vertices[tri.y],
+                                    sphere.vertices[tri.z])
+              .distance <= reach)
+      {
+        reference.insert(int32_t(t));
+      }
+    }
+    EXPECT_EQ(found, reference);
+    found_total += int64_t(found.size());
+  }
+  EXPECT_GT(found_total, 300);
+}
+
+TEST(SsvObject, SegmentThroughAThinBladeIsLiftedOutWholeKeepingItsLength)
+{
+  /* A blade 2 mm thick (z), 10 cm wide; a strand whose second segment dips through it: both
+   * of that segment's nodes are outside (one above, one below), and it came from above. */
+  ColliderSet colliders;
+  colliders.add(make_collider(test::box(vec3(0.05f, 0.05f, 0.001f)), mat4(1.0f)));
+  Strand strand;
+  strand.positions = {vec3(-0.03f, 0, 0.01f), vec3(-0.01f, 0, 0.004f), vec3(0.01f, 0, -0.004f)};
+  strand.offsets.push_back(3);
+  strand.velocities = {vec3(0.0f), vec3(0, 0, -0.5f), vec3(0, 0, -0.5f)};
+  const float l0 = glm::length(strand.positions[1] - strand.positions[0]);
+  const float l1 = glm::length(strand.positions[2] - strand.positions[1]);
+  ASSERT_EQ(segment_mesh_distance(colliders.collider(0), strand.positions[1], strand.positions[2]), 0.0f);
+
+  SweptSphereParams params;
+  params.body_collision = BodyCollision::SweptSpheres;
+  params.thickness = 2e-4f;
+  SsvObjectPass pass(&colliders, params);
+  pass.apply(strand.state(0.02f));
+  const std::vector<vec3> &x = strand.positions;
+  EXPECT_GE(segment_mesh_distance(colliders.collider(0), x[1], x[2]), params.thickness * 0.999f);
+  EXPECT_GE(segment_mesh_distance(colliders.collider(0), x[0], x[1]), params.thickness * 0.999f);
+  EXPECT_GT(x[2].z, 0.001f) << "lifted to the side it came from";
+  EXPECT_NEAR(glm::length(x[1] - x[0]), l0, 1e-6f);
+  EXPECT_NEAR(glm::length(x[2] - x[1]), l1, 1e-6f);
+  EXPECT_EQ(pass.stats().pushed_num, 1);
+  EXPECT_EQ(pass.stats().unresolved_num, 0);
+  /* Resting on the blade: no velocity into it. */
+  EXPECT_GE(strand.velocities[2].z, 0.0f);
+
+  /* "Maps" mode leaves the state alone. */
+  params.body_collision = BodyCollision::Maps;
+  SsvObjectPass off(&colliders, params);
+  Strand again = strand;
+  again.positions[2] = vec3(0.01f, 0, -0.004f);
+  const std::vector<vec3> before = again.positions;
+  off.apply(again.state(0.02f));
+  EXPECT_EQ(again.positions, before);
+}
+
+TEST(SsvObject, PenetratingSegmentsOfARotatedSphereArePushedOutAlongTheNormal)
+{
+  /* A sphere of radius 0.1 moved and turned, and a strand that dips 5 mm into it. */
+  const mat4 m = glm::rotate(glm::translate(mat4(1.0f), vec3(0.3f, -0.2f, 0.1f)), 0.7f,
+                             glm::normalize(vec3(1, 2, 3)));
+  ColliderSet colliders;
+  colliders.add(make_collider(test::uv_sphere(0.1f, 64, 32), m));
+  const vec3 center = transform_point(m, vec3(0.0f));
+  Strand strand;
+  const vec3 up(0, 0, 1);
+  for (int i = 0; i < 6; i++) {
+    /* From 2 cm above the top across it, 5 mm deep in the middle. */
+    const float t = float(i) / 5.0f;
+    const vec3 p = center + vec3(-0.04f + 0.08f * t, 0.0f, 0.0f) +
+                   up * (i == 0 ? 0.12f : 0.095f + 0.0f * t);
+    strand.positions.push_back(p);
+    strand.velocities.push_back(vec3(0.0f));
+  }
+  strand.offsets.push_back(6);
+  SweptSphereParams params;
+  params.body_collision = BodyCollision::SweptSpheres;
+  params.thickness = 1e-4f;
+  SsvObjectPass pass(&colliders, params);
+  pass.apply(strand.state(0.01f));
+  for (int k = 0; k + 1 < 6; k++) {
+    EXPECT_GE(segment_mesh_distance(colliders.collider(0), strand.positions[k], strand.positions[k + 1]),
+              0.999f * params.thickness)
+        << "segment " << k;
+  }
+  EXPECT_EQ(pass.stats().unresolved_num, 0);
+}
+
+TEST(SsvObject, FrictionSlowsTheTangentialMotionWithoutReversingIt)
+{
+  ColliderSet colliders;
+  colliders.add(make_collider(test::box(vec3(0.05f, 0.05f, 0.01f)), mat4(1.0f)));
+  /* A strand lying 0.5 mm above the top face (threshold 1 mm), sliding along x and pressed
+   * down; over the substep it accelerated by 2 m/s² along x. */
+  const auto run = [&](const float mu) {
+    Strand strand;
+    strand.positions = {vec3(-0.02f, 0, 0.0107f), vec3(0.0f, 0, 0.0107f), vec3(0.02f, 0, 0.0107f)};
+    strand.offsets.push_back(3);
+    SweptSphereParams params;
+    params.body_collision = BodyCollision::SweptSpheres;
+    params.thickness = 2e-4f;
+    params.friction = mu;
+    SsvObjectPass pass(&colliders, params);
+    const float h = 0.01f;
+    strand.velocities.assign(3, vec3(0.1f, 0, -0.05f));
+    pass.apply(strand.state(h)); /* records the velocities */
+    strand.velocities.assign(3, vec3(0.1f + 2.0f * h, 0, -0.05f));
+    pass.apply(strand.state(h));
+    return strand.velocities[2];
+  };
+  const vec3 free = run(0.0f), rough = run(0.5f);
+  EXPECT_FLOAT_EQ(free.z, 0.0f) << "no velocity into the body within the threshold";
+  EXPECT_FLOAT_EQ(free.x, 0.12f);
+  /* μ_f |a_t| h = 0.5 · 2 · 0.01 = 0.01 m/s less. */
+  EXPECT_NEAR(rough.x, 0.11f, 1e-6f);
+  EXPECT_FLOAT_EQ(rough.z, 0.0f);
+}
+
+TEST(SsvObject, SegmentPenetrationShareCountsSegmentsThatCutABody)
+{
+  ColliderSet colliders;
+  colliders.add(make_collider(test::box(vec3(0.05f, 0.05f, 0.001f)), mat4(1.0f)));
+  /* Two strands of 2 segments: one crosses the blade in its second segment (both nodes
+   * outside), the other stays above. */
+  const std::vector<int32_t> offsets{0, 3, 6};
+  const std::vector<vec3> x{vec3(-0.03f, 0, 0.01f), vec3(-0.01f, 0, 0.004f), vec3(0.01f, 0, -0.004f),
+                            vec3(-0.03f, 0.01f, 0.01f), vec3(-0.01f, 0.01f, 0.01f), vec3(0.01f, 0.01f, 0.01f)};
+  EXPECT_FLOAT_EQ(segment_penetration_share(offsets, x, colliders, 2e-4f), 0.25f);
+  /* A tolerance deeper than half the blade counts nothing. */
+  EXPECT_FLOAT_EQ(segment_penetration_share(offsets, x, colliders, 0.0011f), 0.0f);
+}

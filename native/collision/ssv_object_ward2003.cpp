@@ -1,0 +1,425 @@
+#include "collision/ssv_object_ward2003.hh"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "core/parallel.hh"
+
+namespace hairdyn {
+
+SsvBVH::SsvBVH(const Span<vec3> vertices, const Span<ivec3> triangles, const int leaf_size)
+{
+  const int32_t tris_num = int32_t(triangles.size());
+  if (tris_num == 0) {
+    return;
+  }
+  corners_.resize(size_t(tris_num) * 3);
+  normals_.resize(size_t(tris_num));
+  leaf_triangles_.resize(size_t(tris_num));
+  std::vector<vec3> centroids(static_cast<size_t>(tris_num));
+  for (int32_t t = 0; t < tris_num; t++) {
+    const ivec3 tri = triangles[t];
+    vec3 *c = &corners_[size_t(t) * 3];
+    c[0] = vertices[tri.x];
+    c[1] = vertices[tri.y];
+    c[2] = vertices[tri.z];
+    const vec3 n = glm::cross(c[1] - c[0], c[2] - c[0]);
+    const float len = glm::length(n);
+    normals_[size_t(t)] = len > 0.0f ? n / len : vec3(0.0f);
+    centroids[size_t(t)] = (c[0] + c[1] + c[2]) / 3.0f;
+    leaf_triangles_[size_t(t)] = t;
+  }
+  nodes_.reserve(size_t(2 * tris_num / std::max(leaf_size, 1) + 1));
+  build_node(0, tris_num, centroids, std::max(leaf_size, 1));
+}
+
+int32_t SsvBVH::build_node(const int32_t begin, const int32_t end,
+                           const std::vector<vec3> &centroids, const int leaf_size)
+{
+  const int32_t index = int32_t(nodes_.size());
+  nodes_.push_back({});
+  constexpr float big = std::numeric_limits<float>::max();
+  vec3 min(big), max(-big), cmin(big), cmax(-big);
+  for (int32_t i = begin; i < end; i++) {
+    const int32_t t = leaf_triangles_[size_t(i)];
+    for (int k = 0; k < 3; k++) {
+      min = glm::min(min, corners_[size_t(t) * 3 + size_t(k)]);
+      max = glm::max(max, corners_[size_t(t) * 3 + size_t(k)]);
+    }
+    cmin = glm::min(cmin, centroids[size_t(t)]);
+    cmax = glm::max(cmax, centroids[size_t(t)]);
+  }
+  /* The node's PSS: centred on the box, through its farthest corner. */
+  const vec3 center = 0.5f * (min + max);
+  float radius_sq = 0.0f;
+  for (int32_t i = begin; i < end; i++) {
+    const int32_t t = leaf_triangles_[size_t(i)];
+    for (int k = 0; k < 3; k++) {
+      const vec3 d = corners_[size_t(t) * 3 + size_t(k)] - center;
+      radius_sq = std::max(radius_sq, glm::dot(d, d));
+    }
+  }
+  nodes_[size_t(index)].volume = {center, std::sqrt(radius_sq) * (1.0f + 1e-6f)};
+  const vec3 extent = cmax - cmin;
+  if (end - begin <= leaf_size || std::max(extent.x, std::max(extent.y, extent.z)) <= 0.0f) {
+    nodes_[size_t(index)].first_or_right = begin;
+    nodes_[size_t(index)].count = end - begin;
+    return index;
+  }
+  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+  const int32_t mid = begin + (end - begin) / 2;
+  std::nth_element(leaf_triangles_.begin() + begin, leaf_triangles_.begin() + mid,
+                   leaf_triangles_.begin() + end, [&](const int32_t a, const int32_t b) {
+                     return centroids[size_t(a)][axis] < centroids[size_t(b)][axis] ||
+                            (centroids[size_t(a)][axis] == centroids[size_t(b)][axis] && a < b);
+                   });
+  build_node(begin, mid, centroids, leaf_size);
+  const int32_t right = build_node(mid, end, centroids, leaf_size);
+  nodes_[size_t(index)].first_or_right = right;
+  nodes_[size_t(index)].count = 0;
+  return index;
+}
+
+void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_distance,
+                              std::vector<TriangleContact> &r_contacts) const
+{
+  if (nodes_.empty()) {
+    return;
+  }
+  /* The LSS of the query against each node's PSS (§5.4: "recursively traversing the BVH
+   * testing the hair's SSV against the bounding volumes"). */
+  int32_t stack[64];
+  int stack_size = 0;
+  stack[stack_size++] = 0;
+  while (stack_size > 0) {
+    const int32_t node_index = stack[--stack_size];
+    const Node &node = nodes_[size_t(node_index)];
+    if (point_segment_distance(node.volume.center, a, b).distance - node.volume.radius >
+        max_distance)
+    {
+      continue;
+    }
+    if (node.count == 0) {
+      /* Median splits: the depth is log2 of the triangles, far below the stack's size. */
+      stack[stack_size++] = node.first_or_right;
+      stack[stack_size++] = node_index + 1;
+      continue;
+    }
+    for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
+      const int32_t t = leaf_triangles_[size_t(i)];
+      const vec3 *c = corners(t);
+      const CoreDistance core = segment_triangle_distance(a, b, c[0], c[1], c[2]);
+      if (core.distance <= max_distance) {
+        r_contacts.push_back({t, core});
+      }
+    }
+  }
+}
+
+namespace {
+
+/* What one contact asks of a segment (object space): move the segment's point at
+ * `s` by `need` along `direction` (need ≤ 0: within reach, not penetrating). */
+struct Push {
+  float need = -std::numeric_limits<float>::infinity();
+  vec3 direction{0.0f};
+  float s = 0.0f;
+};
+
+/* §5.4: the penetration of segment a–b (radius r) into the body at one triangle, and the
+ * direction to push it: over the face, the face's normal and the depth of the segment's
+ * deepest point over the face; at an edge or corner, along the closest-point vector. */
+Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const SsvBVH &bvh,
+                          const TriangleContact &contact)
+{
+  Push push;
+  const vec3 n = bvh.normal(contact.triangle);
+  const vec3 *t = bvh.corners(contact.triangle);
+  if (n == vec3(0.0f)) {
+    return push;
+  }
+  /* Clip the segment to the triangle's prism along n. */
+  float s0 = 0.0f, s1 = 1.0f;
+  for (int k = 0; k < 3 && s0 <= s1; k++) {
+    const vec3 inward = glm::cross(n, t[(k + 1) % 3] - t[k]);
+    const float f0 = glm::dot(a - t[k], inward), f1 = glm::dot(b - t[k], inward);
+    if (f0 < 0.0f && f1 < 0.0f) {
+      s0 = 2.0f;
+    }
+    else if (f0 < 0.0f) {
+      s0 = std::max(s0, f0 / (f0 - f1));
+    }
+    else if (f1 < 0.0f) {
+      s1 = std::min(s1, f0 / (f0 - f1));
+    }
+  }
+  if (s0 <= s1) {
+    const float h0 = glm::dot(a + s0 * (b - a) - t[0], n);
+    const float h1 = glm::dot(a + s1 * (b - a) - t[0], n);
+    push.s = h0 < h1 ? s0 : s1;
+    push.need = r - std::min(h0, h1);
+    push.direction = n;
+    return push;
+  }
+  const float d = contact.core.distance;
+  const vec3 away = contact.core.point_a - contact.core.point_b;
+  if (d > 0.0f && glm::dot(away, n) >= 0.0f) {
+    push.direction = away / d;
+    push.need = r - d;
+  }
+  /* A segment through the triangle's edge (d = 0) pierces a neighbour's face: that face's
+   * prism gives its push. */
+  push.s = contact.core.s;
+  return push;
+}
+
+/* The contacts of one segment: the deepest decides whether it is inside and how its velocity
+ * is restricted; each iteration removes the shallowest penetration (a segment through a thin
+ * body near its edge leaves it across the edge, not through its far face). */
+struct Candidates {
+  bool any = false;
+  Push deepest;
+  Push shallowest; /* of the penetrating ones (need > 0) */
+
+  void add(const Push &push)
+  {
+    any = true;
+    if (push.need > deepest.need) {
+      deepest = push;
+    }
+    if (push.need > 0.0f && (!(shallowest.need > 0.0f) || push.need < shallowest.need)) {
+      shallowest = push;
+    }
+  }
+};
+
+/* The tip of segment a–b (length kept) turned about a so that its point at push.s rises by
+ * push.need along push.direction, to first order: the tip moves across the segment, along the
+ * normal's component n⊥ perpendicular to it, by need / (s |n⊥|²). A segment pointing steeply
+ * into the body (more than 60° from the surface) is mirrored in the surface's plane instead,
+ * where the first-order turn would be too slow. */
+vec3 turn_out(const vec3 &a, const vec3 &b, const float length, const Push &push)
+{
+  const vec3 n = push.direction;
+  const float len = glm::length(b - a);
+  if (!(len > 0.0f) || !(length > 0.0f)) {
+    return b;
+  }
+  const vec3 u = (b - a) / len;
+  const float along = glm::dot(u, n);
+  vec3 direction;
+  if (along < -0.5f) {
+    direction = u - 2.0f * along * n;
+  }
+  else {
+    const vec3 across = n - along * u;
+    const float lever = std::max(push.s, 0.05f);
+    const float step = std::min(1.01f * push.need / (lever * glm::dot(across, across)) + 1e-7f,
+                                length);
+    direction = b + step * across - a;
+  }
+  const float direction_len = glm::length(direction);
+  return direction_len > 0.0f ? a + direction * (length / direction_len) : b;
+}
+
+}  // namespace
+
+SsvObjectPass::SsvObjectPass(const ColliderSet *colliders, const SweptSphereParams &params)
+    : colliders_(colliders), params_(params)
+{
+  rebuild();
+}
+
+void SsvObjectPass::rebuild()
+{
+  bodies_.clear();
+  if (colliders_ == nullptr) {
+    return;
+  }
+  for (int64_t i = 0; i < colliders_->colliders_num(); i++) {
+    const Collider &collider = colliders_->collider(i);
+    Body body;
+    body.collider = &collider;
+    body.bvh = SsvBVH(collider.vertices(), collider.triangles());
+    bodies_.push_back(std::move(body));
+  }
+}
+
+void SsvObjectPass::apply(const SubstepState &state)
+{
+  const MutableSpan<vec3> x = state.positions_wo;
+  const MutableSpan<vec3> v = state.velocities_wo;
+  const bool have_previous = int64_t(previous_velocities_.size()) == v.size();
+  if (!params_.uses_swept_spheres() || colliders_ == nullptr || bodies_.empty()) {
+    previous_velocities_.assign(v.begin(), v.end());
+    return;
+  }
+  if (int64_t(bodies_.size()) != colliders_->colliders_num()) {
+    rebuild();
+  }
+  const auto start = std::chrono::steady_clock::now();
+  struct Frame {
+    mat4 world_to_object, previous_world_to_object;
+    mat3 direction_to_world; /* for unit vectors: rotation part (a similarity) */
+    float scale;
+  };
+  std::vector<Frame> frames;
+  for (Body &body : bodies_) {
+    const mat4 &m = body.collider->object_to_world();
+    const mat4 previous = body.has_previous ? body.previous_object_to_world : m;
+    const float scale = uniform_scale(m);
+    frames.push_back({glm::inverse(m), glm::inverse(previous), mat3(m) / scale, scale});
+  }
+  const Span<int32_t> offsets = state.curve_offsets;
+  const float h = state.h;
+  const float threshold = params_.distance_threshold;
+  const float mu = params_.friction;
+  constexpr int iterations_num = 8;
+
+  struct Counts {
+    int64_t pushed = 0, near = 0, unresolved = 0;
+  };
+  const Counts counts = parallel_reduce(
+      offsets.size() - 1, 32, Counts{},
+      [&](const IndexRange curves) {
+        Counts local;
+        std::vector<TriangleContact> contacts;
+        for (int64_t c = curves.start; c < curves.one_after_last(); c++) {
+          vec3 original_base = x[offsets[c]];
+          for (int32_t k = offsets[c]; k + 1 < offsets[c + 1]; k++) {
+            const vec3 a = x[k];
+            const vec3 base_before = original_base;
+            const float length = glm::length(x[k + 1] - base_before);
+            original_base = x[k + 1];
+            const float r = state.radii.is_empty() ? params_.thickness :
+                                                     0.5f * (state.radii[k] + state.radii[k + 1]);
+            /* The base moved (the previous segment was pushed): keep this segment's length. */
+            if (a != base_before) {
+              const vec3 dir = x[k + 1] - a;
+              const float len = glm::length(dir);
+              if (len > 0.0f) {
+                x[k + 1] = a + dir * (length / len);
+              }
+            }
+            const vec3 v_tip_before = v[k + 1];
+            bool pushed = false, resolved = false;
+            Push deepest_wo;
+            for (int iteration = 0; iteration <= iterations_num; iteration++) {
+              const vec3 b = x[k + 1];
+              /* Faces met from behind count only when no face within reach was met from the
+               * front (the segment was inside before: it still goes out along the normal). */
+              Candidates front, behind;
+              for (size_t i = 0; i < bodies_.size(); i++) {
+                const Frame &f = frames[i];
+                const vec3 a_o = transform_point(f.world_to_object, a);
+                const vec3 b_o = transform_point(f.world_to_object, b);
+                const float r_o = r / f.scale;
+                contacts.clear();
+                bodies_[i].bvh.segment_contacts(a_o, b_o, (r + threshold) / f.scale, contacts);
+                for (const TriangleContact &contact : contacts) {
+                  /* Only faces the segment met from their front at the substep's start. */
+                  const float s = contact.core.s;
+                  const vec3 p_before_wo = glm::mix(a, b, s) - h * glm::mix(v[k], v[k + 1], s);
+                  const vec3 p_before_o = transform_point(f.previous_world_to_object, p_before_wo);
+                  const vec3 *t = bodies_[i].bvh.corners(contact.triangle);
+                  const bool from_front =
+                      glm::dot(p_before_o - t[0], bodies_[i].bvh.normal(contact.triangle)) >= -r_o;
+                  const Push push = push_out_of_triangle(a_o, b_o, r_o, bodies_[i].bvh, contact);
+                  if (push.need > -std::numeric_limits<float>::infinity()) {
+                    (from_front ? front : behind)
+                        .add({push.need * f.scale,
+                              glm::normalize(f.direction_to_world * push.direction), push.s});
+                  }
+                }
+              }
+              const Candidates &used = front.any ? front : behind;
+              deepest_wo = used.deepest;
+              if (!(deepest_wo.need > 0.0f)) {
+                resolved = true;
+                break;
+              }
+              if (iteration == iterations_num) {
+                break;
+              }
+              /* §5.4: push the segment out along the normal by its penetration; its base is
+               * placed, so its tip turns about it (a little past, to stop on the surface). */
+              pushed = true;
+              x[k + 1] = turn_out(a, b, length, used.shallowest);
+            }
+            local.pushed += pushed ? 1 : 0;
+            local.unresolved += resolved ? 0 : 1;
+            if (deepest_wo.need > -threshold) {
+              /* §5.4: within the threshold, no velocity into the body; friction μ_f opposes
+               * the tangential motion with the tangential acceleration's magnitude. */
+              local.near++;
+              const vec3 n = deepest_wo.direction;
+              vec3 &vel = v[k + 1];
+              const float into = glm::dot(vel, n);
+              if (into < 0.0f) {
+                vel -= into * n;
+              }
+              if (mu > 0.0f && have_previous && h > 0.0f) {
+                const vec3 accel = (v_tip_before - previous_velocities_[size_t(k) + 1]) / h;
+                const vec3 accel_t = accel - glm::dot(accel, n) * n;
+                const vec3 vel_t = vel - glm::dot(vel, n) * n;
+                const float speed_t = glm::length(vel_t);
+                if (speed_t > 0.0f) {
+                  const float slow = std::min(mu * glm::length(accel_t) * h, speed_t);
+                  vel -= vel_t * (slow / speed_t);
+                }
+              }
+            }
+          }
+        }
+        return local;
+      },
+      [](const Counts &p, const Counts &q) {
+        return Counts{p.pushed + q.pushed, p.near + q.near, p.unresolved + q.unresolved};
+      });
+  for (Body &body : bodies_) {
+    body.previous_object_to_world = body.collider->object_to_world();
+    body.has_previous = true;
+  }
+  previous_velocities_.assign(v.begin(), v.end());
+  stats_.pushed_num += counts.pushed;
+  stats_.near_num += counts.near;
+  stats_.unresolved_num += counts.unresolved;
+  stats_.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                   .count();
+}
+
+float segment_penetration_share(const Span<int32_t> curve_offsets, const Span<vec3> positions_wo,
+                                const ColliderSet &colliders, const float tolerance_wo)
+{
+  const int64_t curves_num = curve_offsets.size() - 1;
+  const int64_t segments_num = positions_wo.size() - curves_num;
+  if (segments_num <= 0 || colliders.colliders_num() == 0) {
+    return 0.0f;
+  }
+  const double cutting = parallel_sum(curves_num, 16, [&](const IndexRange curves) {
+    double count = 0.0;
+    for (int64_t c = curves.start; c < curves.one_after_last(); c++) {
+      for (int32_t k = curve_offsets[c]; k + 1 < curve_offsets[c + 1]; k++) {
+        bool cuts = false;
+        for (int64_t i = 0; i < colliders.colliders_num() && !cuts; i++) {
+          const Collider &collider = colliders.collider(i);
+          const mat4 world_to_object = glm::inverse(collider.object_to_world());
+          const float tolerance = tolerance_wo / uniform_scale(collider.object_to_world());
+          const vec3 a = transform_point(world_to_object, positions_wo[k]);
+          const vec3 b = transform_point(world_to_object, positions_wo[k + 1]);
+          const int samples = 1 + int(std::ceil(glm::length(b - a) / (0.25f * tolerance)));
+          for (int j = 0; j <= samples && !cuts; j++) {
+            cuts = collider.exact().depth(glm::mix(a, b, float(j) / float(samples))) > tolerance;
+          }
+        }
+        count += cuts ? 1.0 : 0.0;
+      }
+    }
+    return count;
+  });
+  return float(cutting / double(segments_num));
+}
+
+}  // namespace hairdyn
