@@ -185,9 +185,9 @@ TEST(LodSkinning, RestSkeletonGivesTheRestStrands)
   std::vector<vec3> out(groom.positions.size());
   for (int64_t node = 0; node < hierarchy.nodes_num(); node++) {
     for (const int32_t strand : hierarchy.strands(node)) {
-      skin_strand(hierarchy, node, strand, hierarchy.rest_skeleton(node),
-                  hierarchy.rest_frames(node), out);
       const IndexRange points = curve_points(groom.offsets, strand);
+      skin_strand(hierarchy, node, strand, hierarchy.rest_skeleton(node),
+                  hierarchy.rest_frames(node), MutableSpan<vec3>(out).slice(points.start, points.size));
       for (int64_t i = points.start; i < points.one_after_last(); i++) {
         ASSERT_LT(glm::length(out[size_t(i)] - groom.positions[size_t(i)]), 1e-6f);
       }
@@ -213,8 +213,9 @@ TEST(LodSkinning, RigidMotionCarriesStrandsRigidly)
     }
     current_skeleton_frames(skeleton, hierarchy.rest_frames(node), turn, frames);
     for (const int32_t strand : hierarchy.strands(node)) {
-      skin_strand(hierarchy, node, strand, skeleton, frames, out);
       const IndexRange points = curve_points(groom.offsets, strand);
+      skin_strand(hierarchy, node, strand, skeleton, frames,
+                  MutableSpan<vec3>(out).slice(points.start, points.size));
       for (int64_t i = points.start; i < points.one_after_last(); i++) {
         worst = std::max(worst, glm::length(out[size_t(i)] - (turn * groom.positions[size_t(i)] + shift)));
       }

@@ -37,7 +37,10 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
       offsets.push_back(offsets.back() + n);
       const Span<vec3> skeleton = hierarchy_.rest_skeleton(node);
       rest.insert(rest.end(), skeleton.begin(), skeleton.end());
-      normals.push_back(hierarchy_.root_normal(node));
+      /* Every skeleton of a tree measures its angles from the same root normal, so equal
+       * angles mean equal turns on parent and child and the state can pass between them as
+       * it is (§6.2, §6.3). The normal only orients the angles' chart. */
+      normals.push_back(hierarchy_.root_normal(hierarchy_.top_node(node)));
     }
     level_solvers_.emplace_back(offsets, rest, head_to_world_rest, normals, strand_params);
   }
@@ -194,7 +197,7 @@ float LodSolver::merge_deviation(const int32_t parent) const
   const int32_t n = hierarchy_.skeleton_points_num();
   const IndexRange kids = hierarchy_.children(parent);
   std::vector<vec3> estimates(size_t(kids.size * n));
-  std::vector<vec3> mean(size_t(n), vec3(0.0f));
+  std::vector<vec3> mean(static_cast<size_t>(n), vec3(0.0f));
   for (int64_t c = 0; c < kids.size; c++) {
     const int64_t child = kids.start + c;
     const MutableSpan<vec3> estimate(estimates.data() + c * n, n);

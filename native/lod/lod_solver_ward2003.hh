@@ -9,8 +9,9 @@
  * consistent and a switch only decides which skeleton drives which strands. At a split the
  * children take the parent's dynamic state (§6.2), at a merge the parent takes the average
  * of its children's (§6.3), through the solver's angle and angular-velocity accessors: the
- * angles are offsets from each skeleton's own rest shape, so a child inheriting its parent's
- * angles keeps its stored offset from it. Stepping only the active skeletons (the speed-up of
+ * angles are offsets from each skeleton's own rest shape, measured in charts that every
+ * skeleton of a tree orients from the same root normal, so a child inheriting its parent's
+ * angles turns as its parent did and keeps its stored offset from it. Stepping only the active skeletons (the speed-up of
  * Ward's Tables 1-2) needs the strand solver to step a subset of its strands and to take a
  * strand's state from positions; until it can, the cost is that of the whole hierarchy.
  *
@@ -76,7 +77,8 @@ class LodSolver {
   Span<uint8_t> visible() const { return visible_; }
   Span<int32_t> wanted_levels() const { return wanted_; }
 
-  /* A node's current skeleton and frames (end of the last step). */
+  /* A node's current skeleton and frames (end of the last step: a state given by a split or
+   * merge since shows at the next step). */
   Span<vec3> skeleton(int64_t node) const;
   Span<mat3> frames(int64_t node) const;
   /* The strand solver of one depth; node `node` is its curve level_curve(node). */

@@ -28,7 +28,7 @@ void skin_strand(const LodHierarchy &hierarchy, const int64_t node, const int64_
     const int32_t f = i == points.start ? 0 : a + 1;
     const vec3 offset_rest = rest[i] - glm::mix(rest_skeleton[a], rest_skeleton[a + 1], w);
     const vec3 offset_local = glm::transpose(rest_frames[f]) * offset_rest;
-    r_positions_wo[i] = glm::mix(skeleton_wo[a], skeleton_wo[a + 1], w) + frames[f] * offset_local;
+    r_positions_wo[i - points.start] = glm::mix(skeleton_wo[a], skeleton_wo[a + 1], w) + frames[f] * offset_local;
   }
 }
 

@@ -20,7 +20,8 @@ void current_skeleton_frames(Span<vec3> skeleton_wo, Span<mat3> rest_frames,
 
 /* The points of strand `strand` placed on a node's current skeleton and frames: each point
  * keeps its rest offset from the skeleton, in the frame of the skeleton segment it lies on
- * (the root point in the root frame). At rest this gives the rest strand. */
+ * (the root point in the root frame). At rest this gives the rest strand. r_positions_wo
+ * holds the strand's points only. */
 void skin_strand(const LodHierarchy &hierarchy, int64_t node, int64_t strand,
                  Span<vec3> skeleton_wo, Span<mat3> frames, MutableSpan<vec3> r_positions_wo);
 
