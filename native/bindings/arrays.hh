@@ -52,5 +52,6 @@ void bind_groom(py::module_ &m);
 void bind_collision(py::module_ &m);
 void bind_strands(py::module_ &m);
 void bind_lcp(py::module_ &m);
+void bind_lod(py::module_ &m);
 
 }  // namespace hairdyn::bindings

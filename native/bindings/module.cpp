@@ -17,4 +17,5 @@ PYBIND11_MODULE(_native, m)
   bind_collision(m);
   bind_strands(m);
   bind_lcp(m);
+  bind_lod(m);
 }
