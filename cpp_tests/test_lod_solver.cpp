@@ -36,10 +36,11 @@ struct Scene {
   std::shared_ptr<ColliderSet> colliders = head_colliders();
   LodSolver solver;
 
-  explicit Scene(const LodParams &params, const StrandParams &strands = StrandParams(),
+  explicit Scene(const LodParams &params, const WindParams &wind = WindParams(),
                  const int strands_num = 300)
       : groom(strands_num, 10),
-        solver(groom.offsets, groom.positions, {}, groom.normals, head, strands, params)
+        solver(groom.offsets, groom.positions, {}, groom.normals, head, StrandParams(), wind,
+               params)
   {
     solver.set_colliders(colliders.get(), CollisionParams());
   }
@@ -258,11 +259,11 @@ TEST(LodSolver, SplitThenMergeRestoresTheParent)
 
 TEST(LodSolver, MergeAveragesTheChildrenByStrands)
 {
-  StrandParams strands;
-  strands.wind_speed = 3.0f;
+  WindParams wind;
+  wind.speed = 3.0f;
   LodParams params = scene_params();
   params.merge_threshold = 0.0f; /* Keeps the children apart until the test merges them. */
-  Scene scene(params, strands);
+  Scene scene(params, wind);
   const int32_t node = 2;
   scene.solver.split(node);
   for (int frame = 0; frame < 10; frame++) {
@@ -303,15 +304,15 @@ TEST(LodSolver, NoJumpAtATransition)
    * At the frame of the first split the output must equal the unsplit simulation's to
    * rounding (the old skeleton still drives it, the jump is held in the residual); then the
    * spring may add at most (1 - exp(-dt / transition_time)) of the raw jump per frame. */
-  StrandParams strands;
-  strands.wind_speed = 3.0f;
-  strands.wind_noise = 0.5f;
+  WindParams wind;
+  wind.speed = 3.0f;
+  wind.turbulence = 0.5f;
   float raw_jump = 0.0f;
   for (const float transition_time : {0.0f, 0.25f}) {
     LodParams params = scene_params();
     params.transition_time = transition_time;
-    Scene scene(params, strands);
-    Scene unsplit(params, strands);
+    Scene scene(params, wind);
+    Scene unsplit(params, wind);
     std::vector<vec3> previous, unsplit_previous;
     float jump = 0.0f, motion = 0.0f;
     int64_t splits = 0;
@@ -361,12 +362,12 @@ TEST(LodSolver, OffSimulatesTheFinestLevel)
 
 TEST(LodSolver, SameBitsOnOneAndTwoThreads)
 {
-  StrandParams strands;
-  strands.wind_speed = 2.0f;
+  WindParams wind;
+  wind.speed = 2.0f;
   std::vector<std::vector<vec3>> results;
   for (const int threads : {1, 2}) {
     set_thread_num(threads);
-    Scene scene(scene_params(), strands);
+    Scene scene(scene_params(), wind);
     for (int frame = 0; frame < 12; frame++) {
       scene.step(glm::mix(vec3(0.0f, -3.0f, 0.1f), vec3(0.0f, -0.3f, 0.2f), float(frame) / 11.0f));
     }

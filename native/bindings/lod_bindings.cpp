@@ -87,7 +87,7 @@ void bind_lod(py::module_ &m)
       .def(py::init([](const py::handle curve_offsets, const py::handle rest_positions_wo,
                        const py::handle head_to_world_rest, const py::handle root_uvs,
                        const py::handle root_normals_wo, const StrandParams &strand_params,
-                       const LodParams &lod_params) {
+                       const WindParams &wind, const LodParams &lod_params) {
              const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
              const Span<vec3> rest = as_float3(rest_positions_wo, "rest_positions_wo");
              check_groom(offsets, rest);
@@ -96,11 +96,12 @@ void bind_lod(py::module_ &m)
              const mat4 head = as_matrix(head_to_world_rest, "head_to_world_rest");
              check_lod_params(lod_params);
              py::gil_scoped_release release;
-             return new LodSolver(offsets, rest, uvs, normals, head, strand_params, lod_params);
+             return new LodSolver(offsets, rest, uvs, normals, head, strand_params, wind, lod_params);
            }),
            py::arg("curve_offsets"), py::arg("rest_positions_wo"), py::arg("head_to_world_rest"),
            py::arg("root_uvs") = py::none(), py::arg("root_normals_wo") = py::none(),
-           py::arg("strand_params") = StrandParams(), py::arg("lod_params") = LodParams(),
+           py::arg("strand_params") = StrandParams(), py::arg("wind") = WindParams(),
+           py::arg("lod_params") = LodParams(),
            "Builds the hierarchy (section 4) over root_uvs ((C, 2) float32 scalp coordinates, "
            "or None for a projection of the roots) and one strand solver per level.")
       .def(

@@ -12,7 +12,7 @@ namespace hairdyn {
 LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions_wo,
                      const Span<vec2> root_uvs, const Span<vec3> root_normals_wo,
                      const mat4 &head_to_world_rest, const StrandParams &strand_params,
-                     const LodParams &lod_params)
+                     const WindParams &wind, const LodParams &lod_params)
     : hierarchy_(curve_offsets, rest_positions_wo, root_uvs, root_normals_wo, lod_params),
       lod_params_(lod_params),
       rest_pose_(HeadPose::from_matrix(head_to_world_rest))
@@ -42,7 +42,7 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
        * it is (§6.2, §6.3). The normal only orients the angles' chart. */
       normals.push_back(hierarchy_.root_normal(hierarchy_.top_node(node)));
     }
-    level_solvers_.emplace_back(offsets, rest, head_to_world_rest, normals, strand_params);
+    level_solvers_.emplace_back(offsets, rest, head_to_world_rest, normals, strand_params, wind);
   }
 
   active_.assign(size_t(nodes), 0);

@@ -28,8 +28,9 @@
 #include "lod/hierarchy_ward2003.hh"
 #include "lod/lod_params_ward2003.hh"
 #include "lod/selection_ward2003.hh"
-#include "strands/head_motion.hh"
-#include "strands/strand_dynamics_kurihara1993.hh"
+#include "core/head_motion.hh"
+#include "core/wind.hh"
+#include "strands/strand_solver.hh"
 #include "strands/strand_params.hh"
 
 namespace hairdyn {
@@ -42,7 +43,8 @@ class LodSolver {
    * find_lod_params_error. */
   LodSolver(Span<int32_t> curve_offsets, Span<vec3> rest_positions_wo, Span<vec2> root_uvs,
             Span<vec3> root_normals_wo, const mat4 &head_to_world_rest,
-            const StrandParams &strand_params, const LodParams &lod_params);
+            const StrandParams &strand_params, const WindParams &wind,
+            const LodParams &lod_params);
 
   /* Hair-object collision of every skeleton (see StrandSolver::set_colliders), and the
    * bodies that occlude hair (§6.1). nullptr: neither. */
