@@ -88,6 +88,20 @@ TEST(LodSolver, CameraFarGivesTheCoarsestLevel)
   EXPECT_GT(scene.solver.active_num(), scene.solver.hierarchy().top_nodes_num());
 }
 
+TEST(LodSolver, FirstFrameStartsAtTheLevelsTheCameraAsksFor)
+{
+  Scene scene(scene_params());
+  scene.step(close_eye);
+  Scene stepped(scene_params());
+  stepped.step(far_eye);
+  for (int frame = 0; frame < stepped.solver.hierarchy().max_depth() + 2; frame++) {
+    stepped.step(close_eye);
+  }
+  EXPECT_GT(scene.solver.splits_num(), scene.solver.hierarchy().top_nodes_num());
+  /* Close up from the first frame: as deep as the scene that got there a level per frame. */
+  EXPECT_GE(scene.solver.active_num(), stepped.solver.active_num() * 9 / 10);
+}
+
 TEST(LodSolver, CameraCloseGivesTheFinestLevelNearTheParting)
 {
   LodParams params = scene_params();
@@ -198,7 +212,7 @@ TEST(LodSolver, AtMostOneLevelPerFrameApartFromOcclusion)
     }
     scene.step(eye);
     const std::vector<int32_t> after = strand_levels(scene.solver);
-    for (size_t s = 0; s < after.size(); s++) {
+    for (size_t s = 0; s < after.size() && frame > 0; s++) {
       const int32_t change = std::abs(after[s] - before[s]);
       changes += change;
       if (change > 1) {

@@ -89,6 +89,7 @@ void LodSolver::reset(const mat4 &head_to_world)
   placed_nodes_ = strand_nodes_;
   std::fill(residuals_wo_.begin(), residuals_wo_.end(), vec3(0.0f));
   splits_num_ = merges_num_ = collapses_num_ = 0;
+  starting_ = true;
   update_frames();
   place_strands(0.0f);
 }
@@ -400,7 +401,22 @@ void LodSolver::step(const float frame_dt, const mat4 &head_to_world, const mat4
 {
   splits_num_ = merges_num_ = collapses_num_ = 0;
   if (lod_params_.enabled) {
-    select(LodCamera(view_projection));
+    const LodCamera camera(view_projection);
+    select(camera);
+    /* The first frame after a reset has no previous frame to jump from: it starts at the
+     * levels the camera asks for (the hair is at rest, so the splits are exact). */
+    for (int32_t pass = 0; starting_ && splits_num_ > 0 && pass < hierarchy_.max_depth(); pass++) {
+      const int64_t splits_before = splits_num_;
+      update_frames();
+      select(camera);
+      if (splits_num_ == splits_before) {
+        break;
+      }
+    }
+    if (starting_) {
+      placed_nodes_ = strand_nodes_; /* Nothing was shown yet: no jump to smooth. */
+    }
+    starting_ = false;
   }
   /* Each level's solver runs its strands in parallel. */
   for (StrandSolver &solver : level_solvers_) {

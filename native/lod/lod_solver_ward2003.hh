@@ -50,7 +50,9 @@ class LodSolver {
    * bodies that occlude hair (§6.1). nullptr: neither. */
   void set_colliders(const ColliderSet *colliders, const CollisionParams &params);
   /* One frame: select and switch (§6.1-6.3) from the state at the end of the last frame and
-   * this frame's camera, step every level, place the strands. */
+   * this frame's camera, step every level, place the strands. Levels change by one per frame
+   * except for occlusion, and on the first frame after a reset, which starts at the levels
+   * the camera asks for. */
   void step(float frame_dt, const mat4 &head_to_world, const mat4 &view_projection);
   /* The rest shape carried by the head, at rest, at the coarsest level (the finest when the
    * level of detail is off). */
@@ -132,6 +134,8 @@ class LodSolver {
   std::vector<int32_t> point_levels_;
 
   int64_t splits_num_ = 0, merges_num_ = 0, collapses_num_ = 0;
+  /* True until the first step after a reset. */
+  bool starting_ = true;
 };
 
 /* Mean distance between two point sets of equal size (the report's lod_error against a fine
