@@ -54,5 +54,6 @@ void bind_strands(py::module_ &m);
 void bind_lcp(py::module_ &m);
 void bind_volume(py::module_ &m);
 void bind_ssv(py::module_ &m);
+void bind_lod(py::module_ &m);
 
 }  // namespace hairdyn::bindings

@@ -19,4 +19,5 @@ PYBIND11_MODULE(_native, m)
   bind_lcp(m);
   bind_volume(m);
   bind_ssv(m);
+  bind_lod(m);
 }

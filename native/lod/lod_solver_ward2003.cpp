@@ -1,0 +1,465 @@
+#include "lod/lod_solver_ward2003.hh"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.hh"
+#include "groom/groom.hh"
+#include "lod/skinning_ward2003.hh"
+
+namespace hairdyn {
+
+LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions_wo,
+                     const Span<vec2> root_uvs, const Span<vec3> root_normals_wo,
+                     const mat4 &head_to_world_rest, const StrandParams &strand_params,
+                     const WindParams &wind, const LodParams &lod_params)
+    : hierarchy_(curve_offsets, rest_positions_wo, root_uvs, root_normals_wo, lod_params),
+      lod_params_(lod_params),
+      rest_pose_(HeadPose::from_matrix(head_to_world_rest))
+{
+  finest_ = lod_params.finest_level < 0 ? hierarchy_.max_depth() :
+                                          std::min(lod_params.finest_level, hierarchy_.max_depth());
+  coarsest_ = std::min(lod_params.coarsest_level, finest_);
+
+  /* One strand solver per depth over the skeletons of that depth, in node order. */
+  const int32_t n = hierarchy_.skeleton_points_num();
+  const int64_t nodes = hierarchy_.nodes_num();
+  level_curves_.resize(size_t(nodes));
+  for (int32_t depth = 0; depth <= hierarchy_.max_depth(); depth++) {
+    std::vector<int32_t> offsets{0};
+    std::vector<vec3> rest;
+    std::vector<vec3> normals;
+    for (int64_t node = 0; node < nodes; node++) {
+      if (hierarchy_.depth(node) != depth) {
+        continue;
+      }
+      level_curves_[size_t(node)] = int64_t(offsets.size()) - 1;
+      offsets.push_back(offsets.back() + n);
+      const Span<vec3> skeleton = hierarchy_.rest_skeleton(node);
+      rest.insert(rest.end(), skeleton.begin(), skeleton.end());
+      /* Every skeleton of a tree measures its angles from the same root normal, so equal
+       * angles mean equal turns on parent and child and the state can pass between them as
+       * it is (§6.2, §6.3). The normal only orients the angles' chart. */
+      normals.push_back(hierarchy_.root_normal(hierarchy_.top_node(node)));
+    }
+    level_solvers_.emplace_back(offsets, rest, head_to_world_rest, normals, strand_params, wind);
+  }
+
+  active_.assign(size_t(nodes), 0);
+  visible_.assign(size_t(nodes), 1);
+  wanted_.assign(size_t(nodes), 0);
+  frames_.resize(size_t(nodes * n));
+  strand_nodes_.assign(size_t(hierarchy_.strands_num()), 0);
+  const int64_t points = hierarchy_.rest_positions().size();
+  positions_wo_.resize(size_t(points));
+  residuals_wo_.assign(size_t(points), vec3(0.0f));
+  point_levels_.assign(size_t(points), 0);
+  reset(head_to_world_rest);
+}
+
+void LodSolver::set_colliders(const ColliderSet *colliders, const CollisionParams &params)
+{
+  colliders_ = colliders;
+  for (StrandSolver &solver : level_solvers_) {
+    solver.set_colliders(colliders, params);
+  }
+}
+
+void LodSolver::set_active(const int32_t node, const bool active)
+{
+  active_[size_t(node)] = active ? 1 : 0;
+  if (active) {
+    for (const int32_t strand : hierarchy_.strands(node)) {
+      strand_nodes_[size_t(strand)] = node;
+    }
+  }
+}
+
+void LodSolver::reset(const mat4 &head_to_world)
+{
+  for (StrandSolver &solver : level_solvers_) {
+    solver.reset(head_to_world);
+  }
+  head_rotation_ = HeadPose::from_matrix(head_to_world).rotation_matrix() *
+                   glm::transpose(rest_pose_.rotation_matrix());
+  std::fill(active_.begin(), active_.end(), 0);
+  for (const int32_t node : hierarchy_.level_nodes(lod_params_.enabled ? coarsest_ : finest_)) {
+    set_active(node, true);
+  }
+  placed_nodes_ = strand_nodes_;
+  std::fill(residuals_wo_.begin(), residuals_wo_.end(), vec3(0.0f));
+  splits_num_ = merges_num_ = collapses_num_ = 0;
+  starting_ = true;
+  update_frames();
+  place_strands(0.0f);
+}
+
+Span<vec3> LodSolver::skeleton(const int64_t node) const
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  return level_solvers_[size_t(hierarchy_.depth(node))].positions().slice(
+      level_curves_[size_t(node)] * n, n);
+}
+
+Span<mat3> LodSolver::frames(const int64_t node) const
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  return Span<mat3>(frames_).slice(node * n, n);
+}
+
+Span<vec2> LodSolver::angles(const int64_t node) const
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  return level_solvers_[size_t(hierarchy_.depth(node))].angles().slice(
+      level_curves_[size_t(node)] * n, n);
+}
+
+Span<vec2> LodSolver::angular_velocities(const int64_t node) const
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  return level_solvers_[size_t(hierarchy_.depth(node))].angular_velocities().slice(
+      level_curves_[size_t(node)] * n, n);
+}
+
+void LodSolver::update_frames()
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  parallel_for(hierarchy_.nodes_num(), 64, [&](const IndexRange range) {
+    for (int64_t node = range.start; node < range.one_after_last(); node++) {
+      current_skeleton_frames(skeleton(node), hierarchy_.rest_frames(node), head_rotation_,
+                              MutableSpan<mat3>(frames_.data() + node * n, n));
+    }
+  });
+}
+
+void LodSolver::absorb(const int32_t node, const Span<int32_t> sources)
+{
+  /* §6.3: the parent takes the average of its children's dynamic states (angles and their
+   * rates), weighted by the strands each carries. Written as s0 + Σ w (s − s0) so that equal
+   * states average to themselves bit for bit. */
+  const int32_t n = hierarchy_.skeleton_points_num();
+  StrandSolver &target = level_solvers_[size_t(hierarchy_.depth(node))];
+  const int64_t target_start = level_curves_[size_t(node)] * n;
+  const Span<vec2> first_angles = angles(sources[0]);
+  const Span<vec2> first_rates = angular_velocities(sources[0]);
+  const float total = float(hierarchy_.strands(node).size());
+  for (int32_t k = 1; k < n; k++) {
+    vec2 angle_sum(0.0f), rate_sum(0.0f);
+    for (const int32_t source : sources) {
+      const float w = float(hierarchy_.strands(source).size()) / total;
+      angle_sum += w * (angles(source)[k] - first_angles[k]);
+      rate_sum += w * (angular_velocities(source)[k] - first_rates[k]);
+    }
+    target.angles_for_write()[target_start + k] = first_angles[k] + angle_sum;
+    target.angular_velocities_for_write()[target_start + k] = first_rates[k] + rate_sum;
+  }
+  for (const int32_t source : sources) {
+    active_[size_t(source)] = 0;
+  }
+  set_active(node, true);
+}
+
+void LodSolver::split(const int32_t node)
+{
+  assert(active_[size_t(node)] && !hierarchy_.is_leaf(node));
+  /* §6.2: each child inherits its parent's dynamic state; its own rest shape carries its
+   * stored offset, since the angles are offsets from each skeleton's rest. */
+  const int32_t n = hierarchy_.skeleton_points_num();
+  const Span<vec2> parent_angles = angles(node);
+  const Span<vec2> parent_rates = angular_velocities(node);
+  const IndexRange kids = hierarchy_.children(node);
+  StrandSolver &solver = level_solvers_[size_t(hierarchy_.depth(node) + 1)];
+  for (int64_t child = kids.start; child < kids.one_after_last(); child++) {
+    const int64_t start = level_curves_[size_t(child)] * n;
+    for (int32_t k = 1; k < n; k++) {
+      solver.angles_for_write()[start + k] = parent_angles[k];
+      solver.angular_velocities_for_write()[start + k] = parent_rates[k];
+    }
+    set_active(int32_t(child), true);
+  }
+  active_[size_t(node)] = 0;
+}
+
+void LodSolver::merge(const int32_t parent)
+{
+  const IndexRange kids = hierarchy_.children(parent);
+  std::vector<int32_t> children;
+  for (int64_t child = kids.start; child < kids.one_after_last(); child++) {
+    assert(active_[size_t(child)]);
+    children.push_back(int32_t(child));
+  }
+  absorb(parent, children);
+}
+
+float LodSolver::merge_deviation(const int32_t parent) const
+{
+  /* §6.3: average the parent's control points as the children place them, then measure how
+   * far each child's control points are from their place on that average. */
+  const int32_t n = hierarchy_.skeleton_points_num();
+  const IndexRange kids = hierarchy_.children(parent);
+  std::vector<vec3> estimates(size_t(kids.size * n));
+  std::vector<vec3> mean(static_cast<size_t>(n), vec3(0.0f));
+  for (int64_t c = 0; c < kids.size; c++) {
+    const int64_t child = kids.start + c;
+    const MutableSpan<vec3> estimate(estimates.data() + c * n, n);
+    parent_from_child(skeleton(child), frames(child), hierarchy_.rest_frames(child),
+                      hierarchy_.rest_frames(parent), hierarchy_.offsets(child), estimate);
+    for (int32_t k = 0; k < n; k++) {
+      mean[size_t(k)] += estimate[k] / float(kids.size);
+    }
+  }
+  float deviation = 0.0f;
+  for (int64_t c = 0; c < kids.size; c++) {
+    for (int32_t k = 0; k < n; k++) {
+      deviation = std::max(deviation, glm::length(estimates[size_t(c * n + k)] - mean[size_t(k)]));
+    }
+  }
+  return deviation;
+}
+
+void LodSolver::select(const LodCamera &camera)
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  const int64_t nodes = hierarchy_.nodes_num();
+  const bool occlusion = lod_params_.use_occlusion;
+  const float margin_scale = colliders_ != nullptr && colliders_->colliders_num() > 0 ?
+                                 0.01f * colliders_->size_wo() :
+                                 0.0f;
+  /* §6.1: visibility first, then distance and velocity, per active hair group. */
+  parallel_for(nodes, 64, [&](const IndexRange range) {
+    std::vector<RayHit> scratch;
+    for (int64_t node = range.start; node < range.one_after_last(); node++) {
+      if (!active_[size_t(node)]) {
+        continue;
+      }
+      const Span<vec3> points = skeleton(node);
+      const Span<vec3> velocities = level_solvers_[size_t(hierarchy_.depth(node))]
+                                        .velocities()
+                                        .slice(level_curves_[size_t(node)] * n, n);
+      vec3 centre(0.0f);
+      float speed = 0.0f;
+      for (int32_t k = 0; k < n; k++) {
+        centre += points[k] / float(n);
+        speed += glm::length(velocities[k] - velocities[0]) / float(n - 1);
+      }
+      float bound = 0.0f;
+      for (int32_t k = 0; k < n; k++) {
+        bound = std::max(bound, glm::length(points[k] - centre));
+      }
+      bool visible = camera.sees_sphere(centre, bound + hierarchy_.radius(node));
+      if (visible && occlusion && colliders_ != nullptr && !camera.is_orthographic()) {
+        /* Hidden when the body is in front of every sampled control point past the root. */
+        visible = false;
+        const float margin = hierarchy_.radius(node) + margin_scale;
+        for (const int32_t k : {n / 4, n / 2, (3 * n) / 4, n - 1}) {
+          if (k > 0 && !hidden_by_colliders(*colliders_, camera.position_wo(), points[k], margin,
+                                            scratch))
+          {
+            visible = true;
+            break;
+          }
+        }
+      }
+      visible_[size_t(node)] = visible ? 1 : 0;
+      wanted_[size_t(node)] = visible || !occlusion ?
+                                  wanted_level(camera.distance_to(centre), speed, lod_params_,
+                                               coarsest_, finest_) :
+                                  coarsest_;
+    }
+  });
+
+  /* §6.1: "a transition caused by an occlusion permits the hair representation to transform
+   * into the coarsest strip representation regardless of its current location". A tree
+   * whose active groups are all hidden collapses to the coarsest level at once. */
+  std::vector<uint8_t> tree_visible(size_t(hierarchy_.top_nodes_num()), 0);
+  for (int64_t node = 0; node < nodes; node++) {
+    if (active_[size_t(node)] && visible_[size_t(node)]) {
+      tree_visible[size_t(hierarchy_.top_node(node))] = 1;
+    }
+  }
+  std::vector<uint8_t> changed(size_t(nodes), 0);
+  if (occlusion) {
+    for (int64_t top = 0; top < hierarchy_.top_nodes_num(); top++) {
+      if (tree_visible[size_t(top)]) {
+        continue;
+      }
+      /* Group the tree's active nodes deeper than the coarsest level by their ancestor there. */
+      std::vector<std::pair<int32_t, int32_t>> moves; /* (coarse ancestor, active node) */
+      std::vector<int32_t> stack{int32_t(top)};
+      while (!stack.empty()) {
+        const int32_t node = stack.back();
+        stack.pop_back();
+        if (active_[size_t(node)]) {
+          int32_t ancestor = node;
+          while (hierarchy_.depth(ancestor) > coarsest_) {
+            ancestor = hierarchy_.parent(ancestor);
+          }
+          if (ancestor != node) {
+            moves.emplace_back(ancestor, node);
+          }
+          continue;
+        }
+        const IndexRange kids = hierarchy_.children(node);
+        for (int64_t child = kids.start; child < kids.one_after_last(); child++) {
+          stack.push_back(int32_t(child));
+        }
+      }
+      std::stable_sort(moves.begin(), moves.end(),
+                       [](const auto &a, const auto &b) { return a.first < b.first; });
+      for (size_t i = 0; i < moves.size();) {
+        size_t j = i;
+        std::vector<int32_t> sources;
+        while (j < moves.size() && moves[j].first == moves[i].first) {
+          sources.push_back(moves[j].second);
+          j++;
+        }
+        absorb(moves[i].first, sources);
+        changed[size_t(moves[i].first)] = 1;
+        collapses_num_++;
+        i = j;
+      }
+    }
+  }
+
+  /* §6.2: one level down where more detail is wanted. */
+  for (int64_t node = 0; node < nodes; node++) {
+    if (active_[size_t(node)] && !changed[size_t(node)] && !hierarchy_.is_leaf(node) &&
+        hierarchy_.depth(node) < finest_ && wanted_[size_t(node)] > hierarchy_.depth(node))
+    {
+      split(int32_t(node));
+      const IndexRange kids = hierarchy_.children(node);
+      for (int64_t child = kids.start; child < kids.one_after_last(); child++) {
+        changed[size_t(child)] = 1;
+      }
+      splits_num_++;
+    }
+  }
+
+  /* §6.3: one level up where every child is active, ready (wants its parent's level or
+   * coarser) and close enough to its place on the merged parent. */
+  for (int64_t parent = 0; parent < nodes; parent++) {
+    if (active_[size_t(parent)] || hierarchy_.is_leaf(parent) ||
+        hierarchy_.depth(parent) < coarsest_)
+    {
+      continue;
+    }
+    const IndexRange kids = hierarchy_.children(parent);
+    bool ready = true;
+    for (int64_t child = kids.start; child < kids.one_after_last() && ready; child++) {
+      ready = active_[size_t(child)] && !changed[size_t(child)] &&
+              wanted_[size_t(child)] <= hierarchy_.depth(parent);
+    }
+    if (ready && merge_deviation(int32_t(parent)) <= lod_params_.merge_threshold) {
+      merge(int32_t(parent));
+      changed[size_t(parent)] = 1;
+      merges_num_++;
+    }
+  }
+}
+
+void LodSolver::place_strands(const float frame_dt)
+{
+  const float tau = lod_params_.transition_time;
+  const float decay = tau > 0.0f ? std::exp(-frame_dt / tau) : 0.0f;
+  const Span<int32_t> offsets = hierarchy_.curve_offsets();
+  parallel_for(hierarchy_.strands_num(), 128, [&](const IndexRange range) {
+    for (int64_t strand = range.start; strand < range.one_after_last(); strand++) {
+      const IndexRange points = curve_points(offsets, strand);
+      const MutableSpan<vec3> out(positions_wo_.data() + points.start, points.size);
+      const MutableSpan<vec3> residual(residuals_wo_.data() + points.start, points.size);
+      const int32_t node = strand_nodes_[size_t(strand)];
+      const int32_t old_node = placed_nodes_[size_t(strand)];
+      if (old_node != node && tau > 0.0f) {
+        /* §6.3: the jump between the old and the new skeleton's placement is kept, and the
+         * spring pulls it to zero over the next frames. */
+        skin_strand(hierarchy_, old_node, strand, skeleton(old_node), frames(old_node), out);
+        for (int64_t i = 0; i < points.size; i++) {
+          residual[i] = decay * residual[i] + out[i];
+        }
+        skin_strand(hierarchy_, node, strand, skeleton(node), frames(node), out);
+        for (int64_t i = 0; i < points.size; i++) {
+          residual[i] -= out[i];
+          out[i] += residual[i];
+        }
+      }
+      else {
+        skin_strand(hierarchy_, node, strand, skeleton(node), frames(node), out);
+        for (int64_t i = 0; i < points.size; i++) {
+          residual[i] *= decay;
+          out[i] += residual[i];
+        }
+      }
+      for (int64_t i = 0; i < points.size; i++) {
+        point_levels_[size_t(points.start + i)] = hierarchy_.depth(node);
+      }
+      placed_nodes_[size_t(strand)] = node;
+    }
+  });
+}
+
+void LodSolver::step(const float frame_dt, const mat4 &head_to_world, const mat4 &view_projection)
+{
+  splits_num_ = merges_num_ = collapses_num_ = 0;
+  if (lod_params_.enabled) {
+    const LodCamera camera(view_projection);
+    select(camera);
+    /* The first frame after a reset has no previous frame to jump from: it starts at the
+     * levels the camera asks for (the hair is at rest, so the splits are exact). */
+    for (int32_t pass = 0; starting_ && splits_num_ > 0 && pass < hierarchy_.max_depth(); pass++) {
+      const int64_t splits_before = splits_num_;
+      update_frames();
+      select(camera);
+      if (splits_num_ == splits_before) {
+        break;
+      }
+    }
+    if (starting_) {
+      placed_nodes_ = strand_nodes_; /* Nothing was shown yet: no jump to smooth. */
+    }
+    starting_ = false;
+  }
+  /* Each level's solver runs its strands in parallel. */
+  for (StrandSolver &solver : level_solvers_) {
+    solver.step(frame_dt, head_to_world);
+  }
+  head_rotation_ = HeadPose::from_matrix(head_to_world).rotation_matrix() *
+                   glm::transpose(rest_pose_.rotation_matrix());
+  update_frames();
+  place_strands(frame_dt);
+}
+
+std::vector<int64_t> LodSolver::active_per_level() const
+{
+  std::vector<int64_t> counts(size_t(hierarchy_.max_depth() + 1), 0);
+  for (int64_t node = 0; node < hierarchy_.nodes_num(); node++) {
+    counts[size_t(hierarchy_.depth(node))] += active_[size_t(node)];
+  }
+  return counts;
+}
+
+int64_t LodSolver::active_num() const
+{
+  int64_t count = 0;
+  for (const uint8_t a : active_) {
+    count += a;
+  }
+  return count;
+}
+
+double mean_distance(const Span<vec3> a, const Span<vec3> b)
+{
+  assert(a.size() == b.size());
+  if (a.is_empty()) {
+    return 0.0;
+  }
+  const double sum = parallel_sum(a.size(), 4096, [&](const IndexRange range) {
+    double s = 0.0;
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      s += double(glm::length(a[i] - b[i]));
+    }
+    return s;
+  });
+  return sum / double(a.size());
+}
+
+}  // namespace hairdyn

@@ -1,0 +1,145 @@
+#pragma once
+/* Level-of-detail strand dynamics of Ward & Lin 2003 (§4, §6): the groom's hierarchy of
+ * strips, clusters and strand groups (lod/hierarchy_ward2003.hh), a cut through it chosen
+ * every frame by visibility, distance and velocity (§6.1), split (§6.2) and merged (§6.3) one
+ * level per frame, and every artist strand placed on the skeleton that drives it.
+ *
+ * Dynamics. Each level (depth) of the hierarchy is one StrandSolver over all skeletons of
+ * that depth; every level is stepped every frame, so every skeleton's state stays
+ * consistent and a switch only decides which skeleton drives which strands. At a split the
+ * children take the parent's dynamic state (§6.2), at a merge the parent takes the average
+ * of its children's (§6.3), through the solver's angle and angular-velocity accessors: the
+ * angles are offsets from each skeleton's own rest shape, measured in charts that every
+ * skeleton of a tree orients from the same root normal, so a child inheriting its parent's
+ * angles turns as its parent did and keeps its stored offset from it. Stepping only the active skeletons (the speed-up of
+ * Ward's Tables 1-2) needs the strand solver to step a subset of its strands and to take a
+ * strand's state from positions; until it can, the cost is that of the whole hierarchy.
+ *
+ * Output. Every strand follows the skeleton that drives it with its rest offset
+ * (lod/skinning_ward2003.hh), so the output keeps the groom's topology. At a switch, the jump
+ * between the old and the new skeleton's placement is kept as a residual that a spring pulls
+ * to zero with time constant transition_time (§6.3: "a spring force is used to subtly pull
+ * the children into place"). */
+#include <vector>
+
+#include "collision/collider.hh"
+#include "core/math.hh"
+#include "core/span.hh"
+#include "lod/hierarchy_ward2003.hh"
+#include "lod/lod_params_ward2003.hh"
+#include "lod/selection_ward2003.hh"
+#include "core/head_motion.hh"
+#include "core/wind.hh"
+#include "strands/strand_solver.hh"
+#include "strands/strand_params.hh"
+
+namespace hairdyn {
+
+class LodSolver {
+ public:
+  /* `root_uvs`: one scalp (u, v) per strand or empty; `root_normals_wo`: one unit normal per
+   * strand or empty (see LodHierarchy). `head_to_world_rest` is the head's transform when the
+   * groom had `rest_positions_wo`. The groom must pass find_groom_error, the parameters
+   * find_lod_params_error. */
+  LodSolver(Span<int32_t> curve_offsets, Span<vec3> rest_positions_wo, Span<vec2> root_uvs,
+            Span<vec3> root_normals_wo, const mat4 &head_to_world_rest,
+            const StrandParams &strand_params, const WindParams &wind,
+            const LodParams &lod_params);
+
+  /* Hair-object collision of every skeleton (see StrandSolver::set_colliders), and the
+   * bodies that occlude hair (§6.1). nullptr: neither. */
+  void set_colliders(const ColliderSet *colliders, const CollisionParams &params);
+  /* One frame: select and switch (§6.1-6.3) from the state at the end of the last frame and
+   * this frame's camera, step every level, place the strands. Levels change by one per frame
+   * except for occlusion, and on the first frame after a reset, which starts at the levels
+   * the camera asks for. */
+  void step(float frame_dt, const mat4 &head_to_world, const mat4 &view_projection);
+  /* The rest shape carried by the head, at rest, at the coarsest level (the finest when the
+   * level of detail is off). */
+  void reset(const mat4 &head_to_world);
+
+  const LodHierarchy &hierarchy() const { return hierarchy_; }
+  const LodParams &lod_params() const { return lod_params_; }
+  int32_t coarsest_level() const { return coarsest_; }
+  int32_t finest_level() const { return finest_; }
+
+  /* The output, in the groom's layout: world positions and, per point, the level (depth) of
+   * the skeleton that drives its strand. */
+  Span<vec3> positions() const { return positions_wo_; }
+  Span<int32_t> point_levels() const { return point_levels_; }
+  /* Per strand, the node that drives it; per node, 1 while it is active. */
+  Span<int32_t> strand_nodes() const { return strand_nodes_; }
+  Span<uint8_t> active() const { return active_; }
+  /* Active skeletons per level (depth 0 .. max_depth). */
+  std::vector<int64_t> active_per_level() const;
+  int64_t active_num() const;
+  /* Splits, merges and occlusion collapses made by the last step. */
+  int64_t splits_num() const { return splits_num_; }
+  int64_t merges_num() const { return merges_num_; }
+  int64_t collapses_num() const { return collapses_num_; }
+  /* Per node: visible and wanted level as the last selection saw them (active nodes only). */
+  Span<uint8_t> visible() const { return visible_; }
+  Span<int32_t> wanted_levels() const { return wanted_; }
+
+  /* A node's current skeleton and frames (end of the last step: a state given by a split or
+   * merge since shows at the next step). */
+  Span<vec3> skeleton(int64_t node) const;
+  Span<mat3> frames(int64_t node) const;
+  /* The strand solver of one depth; node `node` is its curve level_curve(node). */
+  const StrandSolver &level_solver(int32_t depth) const { return level_solvers_[size_t(depth)]; }
+  int64_t level_curve(int64_t node) const { return level_curves_[size_t(node)]; }
+  /* A node's segment angles and rates (points 1 .. n-1 of its curve; slot 0 is the root). */
+  Span<vec2> angles(int64_t node) const;
+  Span<vec2> angular_velocities(int64_t node) const;
+
+  /* The transitions step() makes, for tests: split an active node into its children (§6.2);
+   * merge the active children of `parent` into it (§6.3). The output is updated at the next
+   * step. */
+  void split(int32_t node);
+  void merge(int32_t parent);
+  /* m, the largest distance of a child's control point from where the merged parent would put
+   * it (§6.3's positional test). */
+  float merge_deviation(int32_t parent) const;
+
+ private:
+  /* Makes `node` active with the strand-weighted average state of `sources` (§6.3), which
+   * become inactive. */
+  void absorb(int32_t node, Span<int32_t> sources);
+  void select(const LodCamera &camera);
+  void update_frames();
+  void place_strands(float frame_dt);
+  void set_active(int32_t node, bool active);
+
+  LodHierarchy hierarchy_;
+  LodParams lod_params_;
+  int32_t coarsest_ = 0, finest_ = 0;
+  HeadPose rest_pose_;
+  mat3 head_rotation_{1.0f}; /* since rest, at the end of the last step */
+  const ColliderSet *colliders_ = nullptr;
+
+  std::vector<StrandSolver> level_solvers_;
+  std::vector<int64_t> level_curves_;
+
+  /* Per node. */
+  std::vector<uint8_t> active_, visible_;
+  std::vector<int32_t> wanted_;
+  /* Per node and control point: current frames. */
+  std::vector<mat3> frames_;
+
+  /* Per strand: driving node now and at the last placement. */
+  std::vector<int32_t> strand_nodes_, placed_nodes_;
+  /* Per point. */
+  std::vector<vec3> positions_wo_;
+  std::vector<vec3> residuals_wo_;
+  std::vector<int32_t> point_levels_;
+
+  int64_t splits_num_ = 0, merges_num_ = 0, collapses_num_ = 0;
+  /* True until the first step after a reset. */
+  bool starting_ = true;
+};
+
+/* Mean distance between two point sets of equal size (the report's lod_error against a fine
+ * simulation of the same frames). */
+double mean_distance(Span<vec3> a, Span<vec3> b);
+
+}  // namespace hairdyn
