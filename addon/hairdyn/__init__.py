@@ -16,13 +16,14 @@ if "bpy" in locals():
     import importlib
 
     for _module in (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: F821
-                    simulation, operators, io_import, presets, billboards, ui):  # noqa: F821
+                    simulation, operators, io_import, presets, billboards, export,  # noqa: F821
+                    frame_record, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy
 
 from . import (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: E402
-               simulation, operators, io_import, presets, billboards, ui)
+               simulation, operators, io_import, presets, billboards, export, frame_record, ui)
 
 classes = (
     properties.HairdynStrandSettings,
@@ -33,6 +34,8 @@ classes = (
     operators.HAIRDYN_OT_simulate,
     operators.HAIRDYN_OT_bake,
     operators.HAIRDYN_OT_free_bake,
+    export.HAIRDYN_OT_export_bake,
+    frame_record.HAIRDYN_OT_open_frame_record,
     io_import.HAIRDYN_OT_import_tfx,
     io_import.HAIRDYN_OT_import_cem_hair,
     operators.HAIRDYN_OT_collider_add,
