@@ -30,6 +30,7 @@ SUMMARY = "summary.json"
 SHEET = "contact_sheet.png"
 RESULT = "result.json"
 LAST_FRAME = "last_frame.png"
+TASK_TIMEOUT_S = 3600
 THIS_FILE = Path(__file__).resolve()
 CLI = THIS_FILE.parent / "cli.py"
 
@@ -114,27 +115,31 @@ def task_command(host, spec_path):
             "--python", *script]
 
 
-def run_task(spec, host):
-    """Bake one parameter set (a Dask task): writes spec's folder, returns its result dict.
-    Never raises for a failed bake: the result says what went wrong."""
+def prepare_task(spec, host):
+    """Write the set's spec into its folder (dropping an older result); the command that bakes
+    it. The command is all a Dask worker runs (subprocess.run), so no hairdyn code travels."""
     folder = Path(spec["folder"])
     folder.mkdir(parents=True, exist_ok=True)
     spec_path = folder / "spec.json"
     spec_path.write_text(json.dumps(spec, indent=2))
     (folder / RESULT).unlink(missing_ok=True)
-    log = folder / "log.txt"
-    try:
-        process = subprocess.run(task_command(host, spec_path), capture_output=True, text=True,
-                                 timeout=spec.get("timeout", 3600), env=_child_environment())
-        log.write_text(process.stdout + process.stderr)
+    return task_command(host, spec_path)
+
+
+def task_result(spec, process=None, error=None):
+    """The set's result once its process ended (a CompletedProcess) or its task failed
+    (`error`): what the bake wrote in result.json, else a failure naming the cause."""
+    folder = Path(spec["folder"])
+    returncode, output = None, str(error or "")
+    if process is not None:
+        (folder / "log.txt").write_text(process.stdout + process.stderr)
         returncode, output = process.returncode, process.stderr + process.stdout
-    except (OSError, subprocess.TimeoutExpired) as error:
-        returncode, output = None, str(error)
     result_path = folder / RESULT
     if result_path.is_file():
         result = json.loads(result_path.read_text())
     else:  # the process died before it could say
-        result = {"status": "failed", "message": _error_line(output) or
+        result = {"status": "failed", "report": None, "image": None,
+                  "message": _error_line(output) or output.strip()[-300:] or
                   f"the bake process ended with exit code {returncode}"}
     result.update(name=spec["name"], parameters=spec["parameters"], returncode=returncode)
     result_path.write_text(json.dumps(result, indent=2))
@@ -325,19 +330,17 @@ def run_wedge(blend, obj, sets, out_dir, *, frames=None, common=None, host=None,
             results[name] = {**previous, "skipped": True}
     pending = [spec for spec in specs if spec["name"] not in results]
     if pending:
-        import cloudpickle
-
-        cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers lack this file
         client, cluster = _client(scheduler, workers)
         try:
-            futures = client.map(run_task, pending, host=host, pure=False)
+            futures = [client.submit(subprocess.run, prepare_task(spec, host), capture_output=True,
+                                     text=True, timeout=TASK_TIMEOUT_S, pure=False)
+                       for spec in pending]
             for spec, future in zip(pending, futures):
                 try:
-                    results[spec["name"]] = {**future.result(), "skipped": False}
-                except Exception as error:  # noqa: BLE001 (a worker died: that set failed)
-                    results[spec["name"]] = {"status": "failed", "skipped": False,
-                                             "message": f"the Dask task failed: {error}",
-                                             "report": None, "image": None}
+                    result = task_result(spec, process=future.result())
+                except Exception as error:  # noqa: BLE001 (timeout, lost worker: that set failed)
+                    result = task_result(spec, error=f"the Dask task failed: {error!r}")
+                results[spec["name"]] = {**result, "skipped": False}
         finally:
             client.close()
             if cluster is not None:
