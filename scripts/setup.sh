@@ -57,12 +57,18 @@ make_venv .venv /usr/bin/python3.11 requirements-bpy.txt
 
 # Blender 5.1/5.2 run CPython 3.13; Debian 12 has none, pyenv may. CMake builds a second
 # module for it from .venv313's interpreter (which carries the pybind11 it needs).
-python313=$(command -v python3.13 || true)
-if [ -z "$python313" ]; then
-  python313=$(ls -d "$HOME"/.pyenv/versions/3.13*/bin/python3.13 2>/dev/null | sort -V | tail -n 1)
-fi
-if [ -n "$python313" ] && "$python313" -c "import venv, sysconfig, os; \
-    assert os.path.isfile(os.path.join(sysconfig.get_paths()['include'], 'Python.h'))" 2>/dev/null; then
+# (pyenv's shim on PATH fails unless 3.13 is selected, so each candidate is tried.)
+python313=""
+for candidate in $(command -v python3.13 || true) \
+    $(ls -d "$HOME"/.pyenv/versions/3.13*/bin/python3.13 2>/dev/null | sort -rV); do
+  if "$candidate" -c "import venv, sysconfig, os; \
+      assert os.path.isfile(os.path.join(sysconfig.get_paths()['include'], 'Python.h'))" \
+      >/dev/null 2>&1; then
+    python313=$candidate
+    break
+  fi
+done
+if [ -n "$python313" ]; then
   make_venv .venv313 "$python313" requirements-bpy313.txt
 else
   echo "setup: no CPython 3.13 with headers (python3.13 on PATH or under ~/.pyenv/versions):" \
