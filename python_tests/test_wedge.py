@@ -46,23 +46,24 @@ def test_parameter_sets_from_a_table_and_a_product(tmp_path):
 
 
 def _driver_python():
-    """A Python with Dask distributed that can drive the wedge: this one for the bpy module;
-    for Debian's blender binary, Debian's Python 3.11 that it embeds (where apt puts
-    python3-distributed; Blender's sys.executable may name another)."""
-    python = sys.executable if host_name() == "bpy" else "/usr/bin/python3.11"
-    check = subprocess.run([python, "-c", "import distributed"], capture_output=True)
-    if check.returncode != 0:
-        pytest.skip(f"Dask distributed is not installed for {python} (setup.sh installs it in "
-                    ".venv313 and as Debian's python3-distributed; the bpy 5.0 venv has none)")
-    return python
+    """A Python with Dask distributed to drive the wedge: this one when it has Dask, else
+    Debian's Python 3.11 (apt's python3-distributed; for the blender binary that is the Python
+    it embeds, whatever sys.executable names). The tasks run this host's Blender either way."""
+    candidates = ([sys.executable] if host_name() == "bpy" else []) + ["/usr/bin/python3.11"]
+    for python in candidates:
+        if subprocess.run([python, "-c", "import distributed"], capture_output=True).returncode == 0:
+            return python
+    pytest.skip(f"Dask distributed is not installed for {' or '.join(candidates)} (setup.sh "
+                "installs it in .venv313 and as Debian's python3-distributed)")
 
 
 def _wedge(python, out, table):
     command = [python, str(CLI), "wedge", str(FIXTURES / "head_shake.blend"), "--object", "Hair",
                "--out", str(out), "--table", str(table), "--frames", "1", "3",
                "--set", "method=strands", "--set", "children_per_guide=0", "--workers", "2"]
-    if host_name() == "blender":
-        command += ["--blender", bpy.app.binary_path]
+    # the tasks bake in this host: the blender binary, or this Python's bpy module
+    command += ["--blender", bpy.app.binary_path] if host_name() == "blender" else \
+        ["--python", sys.executable]
     process = subprocess.run(command, capture_output=True, text=True, timeout=900)
     summary = json.loads((out / "summary.json").read_text()) if \
         (out / "summary.json").is_file() else None
