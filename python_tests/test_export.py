@@ -78,6 +78,13 @@ def test_export_round_trip_matches_the_cache(suffix, importer, baked_shake, tmp_
                                    cache.read_stream("children", frame)["position"],
                                    rtol=0, atol=1e-6)
         moved.append(expected)
+        if suffix == ".usd":  # USD carries the point attributes too (Alembic: radius only)
+            curves = guides.evaluated_get(depsgraph).data
+            velocity = np.empty(len(curves.points) * 3, dtype=np.float32)
+            curves.attributes["velocity"].data.foreach_get("vector", velocity)
+            np.testing.assert_allclose(velocity.reshape(-1, 3),
+                                       cache.read_frame(frame)["velocity"], rtol=0, atol=1e-5)
+            assert "direction" in curves.attributes
     assert np.abs(moved[0] - moved[2]).max() > 1e-3  # the frames differ: a real animation
 
 
