@@ -168,7 +168,7 @@ def _polyline(image, xs, ys, colour=_LINE):
 def plot(table, width=800, panel_height=110):
     """An RGB image (H, W, 3) uint8: one panel per figure over the frames, each with its
     title and value range, the frame range under the last."""
-    margin_left, margin_top, gap = 90, 28, 40
+    margin_left, margin_top, gap = 112, 28, 40
     frames = table["frame"]
     height = margin_top + len(FIGURES) * (panel_height + gap)
     image = np.full((height, width, 3), 255, dtype=np.uint8)
