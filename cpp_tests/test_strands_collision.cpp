@@ -7,7 +7,7 @@
 #include "collision/collider.hh"
 #include "collision_test_shapes.hh"
 #include "groom/metrics.hh"
-#include "strands/strand_dynamics_kurihara1993.hh"
+#include "strands/strand_solver.hh"
 
 using namespace hairdyn;
 

@@ -2,7 +2,9 @@
 
 Every test that needs a scene opens a fixture from blend_fixtures/ fresh.
 """
+
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -27,6 +29,15 @@ def pytest_report_header(config):
     return f"hairdyn host: {host_name()} (Blender {bpy.app.version_string})"
 
 
+def shown(struct_name, field_name, si_value):
+    """What the panel's property holds for an SI value of a native field: value × the field's
+    display_scale (native ParamInfo.shown_as), so tests hold whatever the panel's unit is."""
+    from hairdyn import native
+
+    fields = getattr(native.load(), struct_name).fields()
+    return si_value * next(f for f in fields if f["name"] == field_name)["display_scale"]
+
+
 @pytest.fixture(scope="session", autouse=True)
 def addon():
     if not hasattr(bpy.types.Object, "hairdyn"):
@@ -43,6 +54,23 @@ def open_fixture():
         assert path.is_file(), f"missing fixture {path}: run blend_fixtures/make_fixtures.py"
         bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
         return bpy.context.scene
+
+    return load
+
+
+@pytest.fixture
+def saved_fixture(tmp_path):
+    """saved_fixture("head_shake.blend") opens a copy saved in tmp_path (so '//' cache folders
+    land there) and returns its "Hair" object, active, its frame range ending at frame_end."""
+
+    def load(name, frame_end):
+        path = tmp_path / name
+        shutil.copy(FIXTURES / name, path)
+        bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
+        hair = bpy.data.objects["Hair"]
+        hair.hairdyn.frame_end = frame_end
+        bpy.context.view_layer.objects.active = hair
+        return hair
 
     return load
 

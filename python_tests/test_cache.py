@@ -1,13 +1,11 @@
 """Bake to a cache on disk, play it back, resume it; bad caches give errors naming files."""
 import json
-import shutil
 
 import bpy
 import numpy as np
 import pytest
 
-from conftest import FIXTURES
-from hairdyn import bridge, playback, simulation
+from hairdyn import bake, bridge, playback
 from hairdyn.cache import Cache, CacheError
 
 
@@ -92,14 +90,9 @@ def test_unwritable_cache_directory(tmp_path):
 
 
 @pytest.fixture
-def saved_shake(tmp_path):
+def saved_shake(saved_fixture, tmp_path):
     """head_shake.blend saved into tmp_path, so '//' caches land there."""
-    path = tmp_path / "shake.blend"
-    shutil.copy(FIXTURES / "head_shake.blend", path)
-    bpy.ops.wm.open_mainfile(filepath=str(path), load_ui=False)
-    hair = bpy.data.objects["Hair"]
-    hair.hairdyn.frame_end = 24
-    return hair, tmp_path
+    return saved_fixture("head_shake.blend", 24), tmp_path
 
 
 def read_output(hair):
@@ -122,7 +115,7 @@ def test_bake_playback_and_reopen(saved_shake):
         assert np.array_equal(read_output(hair), cache.read_frame(frame)["position"])
     # The bake survives saving and reopening; the handler is still there.
     bpy.ops.wm.save_mainfile()
-    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "shake.blend"), load_ui=False)
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "head_shake.blend"), load_ui=False)
     hair = bpy.data.objects["Hair"]
     assert playback.on_frame_change in bpy.app.handlers.frame_change_post
     bpy.context.scene.frame_set(7)
@@ -181,7 +174,7 @@ def test_unsaved_file_with_relative_cache_is_a_clear_error(empty_scene):
     empty_scene.collection.objects.link(hair)
     assert hair.hairdyn.cache_directory == "//hairdyn_cache/"
     with pytest.raises(HairdynError, match="Save the .blend file first"):
-        simulation.cache_directory(hair)
+        bake.cache_directory(hair)
     bpy.context.view_layer.objects.active = hair
     with pytest.raises(RuntimeError, match="Save the .blend file first"):
         bpy.ops.hairdyn.bake()
@@ -215,7 +208,7 @@ def test_strand_bake_plays_back_guides_and_children(saved_shake):
 
 def test_object_deleted_during_a_bake_keeps_the_frames(saved_shake):
     hair, tmp_path = saved_shake
-    runner = simulation.start_bake(bpy.context, hair)
+    runner = bake.start_bake(bpy.context, hair)
     for _ in range(5):
         runner.advance()
     bpy.data.objects.remove(hair)
@@ -224,7 +217,7 @@ def test_object_deleted_during_a_bake_keeps_the_frames(saved_shake):
     with pytest.raises(HairdynError, match="deleted during the simulation; the frames written "
                                            "before are kept"):
         runner.advance()
-    report = simulation.finish_bake(runner)
+    report = bake.finish_bake(runner)
     assert report["object"] == "Hair" and report["frames"] >= 5
     cache = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
     frames = cache.frames()  # every frame simulated before the failure, complete
@@ -241,7 +234,7 @@ def test_reloading_the_file_during_playback_forgets_the_open_caches(saved_shake)
     bpy.context.scene.frame_set(3)
     assert playback._open_caches  # playback opened the cache
     bpy.ops.wm.save_mainfile()
-    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "shake.blend"), load_ui=False)
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "head_shake.blend"), load_ui=False)
     assert not playback._open_caches  # the load handler dropped what belonged to the old file
     bpy.context.scene.frame_set(4)
     hair = bpy.data.objects["Hair"]

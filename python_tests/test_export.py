@@ -25,7 +25,7 @@ def _exporter_missing(suffix):
 @pytest.fixture
 def baked_shake(open_fixture, tmp_path):
     """head_shake.blend's hair baked over a few frames, with child hairs."""
-    from hairdyn import cli, simulation
+    from hairdyn import bake, cli
     from hairdyn.cache import Cache
 
     open_fixture("head_shake.blend")
@@ -33,11 +33,11 @@ def baked_shake(open_fixture, tmp_path):
     hair.hairdyn.cache_directory = str(tmp_path / "cache")
     hair.hairdyn.frame_start, hair.hairdyn.frame_end = FRAMES
     cli.apply_settings(hair.hairdyn, ["method=strands", "children_per_guide=2"])
-    runner = simulation.start_bake(bpy.context, hair)
+    runner = bake.start_bake(bpy.context, hair)
     while not runner.done:
         runner.advance()
-    simulation.finish_bake(runner)
-    return hair, Cache.open(simulation.cache_directory(hair))
+    bake.finish_bake(runner)
+    return hair, Cache.open(bake.cache_directory(hair))
 
 
 def _imported_curves(importer, path):

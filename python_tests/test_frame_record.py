@@ -65,14 +65,14 @@ def test_kinetic_energy_is_half_the_sum_of_squared_speeds():
 def test_record_of_a_bake_matches_its_report(open_fixture, tmp_path):
     """Driven frame by frame the way the bake loop drives it: the record's summary equals the
     report's ms_per_frame, stretch_max and penetration_share."""
-    from hairdyn import cli, simulation
+    from hairdyn import bake, cli
 
     open_fixture("head_shake.blend")
     hair = bpy.data.objects["Hair"]
     hair.hairdyn.cache_directory = str(tmp_path)
     hair.hairdyn.frame_start, hair.hairdyn.frame_end = 1, 8
     cli.apply_settings(hair.hairdyn, ["method=strands"])
-    runner = simulation.start_bake(bpy.context, hair)
+    runner = bake.start_bake(bpy.context, hair)
     record = frame_record.start(runner.cache.directory)
     while not runner.done:
         frame, ms = runner.advance()
@@ -83,8 +83,8 @@ def test_record_of_a_bake_matches_its_report(open_fixture, tmp_path):
             "penetration_share": penetration["deeper_num"] / penetration["points_num"]
             if penetration else 0.0,
             "kinetic_energy": frame_record.kinetic_energy(sim.velocities),
-            "contacts": getattr(sim.solver, "contacts_num", 0)})
-    report = simulation.finish_bake(runner)
+            "contacts": getattr(sim.method.solver, "contacts_num", 0)})
+    report = bake.finish_bake(runner)
     png = record.finish()
     assert png.parent == runner.cache.directory and png.is_file()
     summary = record.summary()

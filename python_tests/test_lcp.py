@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from hairdyn import bridge, cli, native, simulation
+from hairdyn.methods import lcp
 from hairdyn.errors import HairdynError
 
 
@@ -67,7 +68,7 @@ def test_lcp_particles_reach_the_point_output(open_fixture):
 
 def test_lcp_needs_a_scalp(open_fixture):
     hair = lcp_hair(open_fixture, "head_curves.blend")
-    hair.hairdyn.lcp_scalp = "no_such_group"
+    hair.hairdyn.lcp_init.scalp_group = "no_such_group"
     with pytest.raises(HairdynError, match="no vertex group 'no_such_group' marking the scalp"):
         simulation.run(bpy.context, hair, 1, 2)
 
@@ -77,7 +78,7 @@ def test_lcp_bad_values_are_refused(open_fixture):
     with pytest.raises(cli.UsageError, match="h2 must be between"):
         cli.apply_settings(hair.hairdyn, ["h2=0"])
     with pytest.raises(cli.UsageError, match="there is no image named 'Nope'"):
-        cli.apply_settings(hair.hairdyn, ["lcp_length_image=Nope"])
+        cli.apply_settings(hair.hairdyn, ["length_image=Nope"])
     hair.hairdyn.lcp.particle_spacing = 0.9  # larger than the head: no particle fits
     with pytest.raises(HairdynError, match="No particles"):
         simulation.run(bpy.context, hair, 1, 2)
@@ -138,7 +139,7 @@ def test_billboards_follow_the_hair_direction(open_fixture):
 def rest_particles(hair):
     """The particles LCP starts from (the solver built at the rest frame), by attribute."""
     built = simulation.Simulation(hair, depsgraph(), bpy.context.scene)
-    return {name: np.array(values) for name, values in built.particle_arrays().items()}
+    return {name: np.array(values) for name, values in built.method.particle_arrays().items()}
 
 
 def body_local(points):
@@ -180,7 +181,7 @@ def test_lcp_scalp_from_selected_faces(open_fixture):
     """Only the selected faces grow hair: the top of the head on its +X side."""
     hair = lcp_hair(open_fixture, "head_curves.blend")
     select_faces(lambda c: (c[:, 0] > 0.01) & (c[:, 2] > 0.2))
-    cli.apply_settings(hair.hairdyn, ["lcp_scalp_source=faces", "lcp_scalp=no_such_group"])
+    cli.apply_settings(hair.hairdyn, ["scalp_source=faces", "scalp_group=no_such_group"])
     particles = rest_particles(hair)
     roots = body_local(particles["position"][particles["s"] < 0.0])
     assert len(roots) > 20
@@ -192,9 +193,9 @@ def test_lcp_length_map_from_an_image(open_fixture):
     """L(u, v) from a grey image times L_max: hair on the image's bright half is longer."""
     hair = lcp_hair(open_fixture, "head_curves.blend")
     grey_image("Lengths", 0.25, 1.0)
-    cli.apply_settings(hair.hairdyn, ["lcp_length_source=image", "lcp_length_image=Lengths",
+    cli.apply_settings(hair.hairdyn, ["length_source=image", "length_image=Lengths",
                                       "max_length=0.2"])
-    assert hair.hairdyn.lcp_length_image.name == "Lengths"
+    assert hair.hairdyn.lcp_init.length_image.name == "Lengths"
     particles = rest_particles(hair)
     u, s = particles["u"], particles["s"]
     assert s[u < 0.4].max() < 0.25 * 0.2 + 0.002
@@ -205,12 +206,12 @@ def test_lcp_length_map_from_vertex_weights(open_fixture):
     """L(u, v) from the head's vertex weights times L_max: the heavy side's hair is longer."""
     hair = lcp_hair(open_fixture, "head_curves.blend")
     weight_group("length", 0.25, 1.0)
-    cli.apply_settings(hair.hairdyn, ["lcp_length_source=weights", "lcp_length_group=length",
+    cli.apply_settings(hair.hairdyn, ["length_source=weights", "length_group=length",
                                       "max_length=0.2"])
     particles = rest_particles(hair)
     # Where each particle grows from: the scalp vertex nearest to its (u, v) on the scalp map.
-    vertices, triangles, _ = simulation.scalp_patch(bpy.data.objects["Body"], depsgraph(),
-                                                    hair.hairdyn)
+    vertices, triangles, _ = lcp.scalp_patch(bpy.data.objects["Body"], depsgraph(),
+                                             hair.hairdyn.lcp_init)
     scalp_uv = native.load().harmonic_scalp_map(vertices, triangles)
     uv = np.stack([particles["u"], particles["v"]], axis=1)
     nearest = ((uv[:, None, :] - scalp_uv[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
@@ -226,16 +227,16 @@ def missing_file_image():
 
 
 @pytest.mark.parametrize("prepare, assignments, message", [
-    (None, ["lcp_length_source=image"], "Empty length map: no Length Image is set"),
-    (lambda: grey_image("Black", 0.0, 0.0), ["lcp_length_source=image", "lcp_length_image=Black"],
+    (None, ["length_source=image"], "Empty length map: no Length Image is set"),
+    (lambda: grey_image("Black", 0.0, 0.0), ["length_source=image", "length_image=Black"],
      "Empty length map: the image 'Black' is black everywhere"),
-    (missing_file_image, ["lcp_length_source=image", "lcp_length_image=Missing"],
+    (missing_file_image, ["length_source=image", "length_image=Missing"],
      "Empty length map: the image 'Missing' has no pixels"),
-    (lambda: weight_group("length", 0.0, 0.0), ["lcp_length_source=weights"],
+    (lambda: weight_group("length", 0.0, 0.0), ["length_source=weights"],
      "Empty length map: the weights of the group 'length' are zero over the whole scalp"),
-    (None, ["lcp_length_source=weights", "lcp_length_group=nope"],
+    (None, ["length_source=weights", "length_group=nope"],
      "Empty length map: 'Body' has no vertex group 'nope'"),
-    (lambda: select_faces(lambda c: np.zeros(len(c), bool)), ["lcp_scalp_source=faces"],
+    (lambda: select_faces(lambda c: np.zeros(len(c), bool)), ["scalp_source=faces"],
      "No face of 'Body' is selected: select the scalp's faces"),
 ], ids=["no image", "black image", "image without pixels", "zero weights", "missing group",
         "no face selected"])
@@ -266,9 +267,9 @@ def test_lcp_particles_from_the_groom(open_fixture):
     hair = lcp_hair(open_fixture, "head_curves.blend")
     body = bpy.data.objects["Body"]
     body.vertex_groups.remove(body.vertex_groups["scalp"])
-    cli.apply_settings(hair.hairdyn, ["lcp_init=groom"])
+    cli.apply_settings(hair.hairdyn, ["particles_from=groom"])
     runner = simulation.Runner(bpy.context, hair, 1, 2)
-    solver, groom = runner.simulation.solver, runner.simulation.groom
+    solver, groom = runner.simulation.method.solver, runner.simulation.groom
     positions, s = np.array(solver.positions), np.array(solver.s)
     uv = np.stack([solver.u, solver.v], axis=1)
     points, offsets = groom.positions_wo.astype(np.float64), groom.curve_offsets
@@ -307,7 +308,7 @@ def test_strands_move_with_the_particles_near_their_u_v_s():
                              v=np.zeros(6, np.float32), directions=np.tile(down, (6, 1)))
     solver.positions[3] = roots[1] - 0.01 * down  # B's root particle under B's root
     head = np.eye(4)
-    skin = simulation.ParticleSkin(groom, solver, head, neighbours_num=2)
+    skin = lcp.ParticleSkin(groom, solver, head, neighbours_num=2)
     assert np.allclose(skin.apply(solver.positions, head), groom.positions_wo, atol=1e-6)
     moved = solver.positions.copy()
     moved[4:] += [0.0, 0.05, 0.0]  # B's free particles

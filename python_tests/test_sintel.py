@@ -41,7 +41,7 @@ def test_sintel_head_turn_stays_out_of_the_bust(use_collision, tmp_path):
     hair.hairdyn.cache_directory = str(tmp_path)
     runner = simulation.Runner(bpy.context, hair, 1, 24)
     if not use_collision:  # ...but only the first run lets the solver collide
-        runner.simulation.solver.set_colliders(None)
+        runner.simulation.method.solver.set_colliders(None)
     while not runner.done:
         runner.advance()
     report = runner.report()
@@ -63,10 +63,10 @@ def test_sintel_groom_on_lcp_follows_the_head_turn(tmp_path):
     keep their lengths and stay out of the bust."""
     hair, bust = sintel_scene()
     hair.hairdyn.method = 'LCP'
-    hair.hairdyn.lcp_init = 'GROOM'
+    hair.hairdyn.lcp_init.particles_from = 'GROOM'
     hair.hairdyn.cache_directory = str(tmp_path)
     runner = simulation.Runner(bpy.context, hair, 1, 24)
-    assert runner.simulation.solver.interpenetrating_pairs_num == 0
+    assert runner.simulation.method.solver.interpenetrating_pairs_num == 0
     while not runner.done:
         runner.advance()
     report = runner.report()

@@ -3,6 +3,7 @@ import bpy
 import numpy as np
 import pytest
 
+from conftest import shown
 from hairdyn import bridge, cli, simulation
 
 
@@ -90,8 +91,9 @@ def test_wind_presses_hair_against_the_head(open_fixture, use_collision):
     collision it goes through, with collision it stays out (so the checks can fail)."""
     hair = strands_on(open_fixture, "head_curves.blend")
     strands = hair.hairdyn.strands
-    strands.wind_speed, strands.wind_direction, strands.wind_noise = 15.0, (0.0, -1.0, 0.0), 0.0
-    strands.k_theta = strands.k_phi = 0.02
+    wind = hair.hairdyn.wind
+    wind.speed, wind.direction, wind.turbulence = 15.0, (0.0, -1.0, 0.0), 0.0
+    strands.k_theta = strands.k_phi = shown("StrandParams", "k_theta", 2e-8)  # N·m/rad
     hair.hairdyn.use_collision = use_collision
     runner = simulation.Runner(bpy.context, hair, 1, 24)
     while not runner.done:
@@ -125,15 +127,15 @@ def test_child_hairs_follow_their_guides(open_fixture):
 def test_set_nested_parameters_from_the_command_line(open_fixture):
     open_fixture("head_curves.blend")
     settings = bpy.data.objects["Hair"].hairdyn
-    cli.apply_settings(settings, ["method=strands", "k_theta=0.5", "strands.damping=2",
-                                  "collision.damping=3", "wind_direction=1,0,0",
+    cli.apply_settings(settings, ["method=strands", "k_theta=0.5", "strands.damping=0.5",
+                                  "collision.damping=3", "wind.direction=1,0,0",
                                   "integrator=explicit", "colliders=Body"])
     assert settings.method == 'STRANDS' and settings.strands.k_theta == pytest.approx(0.5)
-    assert settings.strands.damping == pytest.approx(2) and settings.collision.damping == 3
-    assert tuple(settings.strands.wind_direction) == (1, 0, 0)
+    assert settings.strands.damping == pytest.approx(0.5) and settings.collision.damping == 3
+    assert tuple(settings.wind.direction) == (1, 0, 0)
     assert settings.strands.integrator == 'EXPLICIT'
     assert [item.object.name for item in settings.colliders] == ["Body"]
-    for bad, message in [("damping=1", "ambiguous"), ("wind_direction=1,0", "needs 3 value"),
+    for bad, message in [("damping=1", "ambiguous"), ("wind.direction=1,0", "needs 3 value"),
                          ("strands.substeps=0", "between 1 and 1000"), ("colliders=Nope", "Nope")]:
         with pytest.raises(cli.UsageError, match=message):
             cli.apply_settings(settings, [bad])

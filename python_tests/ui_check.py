@@ -84,13 +84,13 @@ def screenshot():
 
 def wait_for_bake():
     """Poll until the modal bake has written its manifest as complete (or 60 s pass)."""
-    from hairdyn import simulation
+    from hairdyn import bake
     from hairdyn.cache import Cache
 
     result.setdefault("polls", 0)
     result["polls"] += 1
     try:
-        manifest = Cache.open(simulation.cache_directory(bpy.data.objects[object_name])).manifest
+        manifest = Cache.open(bake.cache_directory(bpy.data.objects[object_name])).manifest
     except Exception:  # not created yet
         manifest = {}
     if manifest.get("complete"):

@@ -23,6 +23,7 @@ suite() {
 }
 
 export HAIRDYN_ARTIFACTS="$ROOT/out/test_artifacts"
+suite "Style (ruff, clang-format)" scripts/check_style.sh
 suite "C++ (ctest)" ctest --test-dir build --output-on-failure --timeout 300
 suite "Python in the blender binary ($(blender --version 2>/dev/null | head -n 1))" \
   blender -b --factory-startup --python-exit-code 1 --python python_tests/run_in_blender.py -- -q -rs

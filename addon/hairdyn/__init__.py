@@ -1,6 +1,12 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 """hairdyn: hair dynamics from Kurihara 1993, Ward & Lin 2003, Bando 2003 and Petrovic 2006,
-with a native C++ solver (hairdyn._native)."""
+with a native C++ solver (hairdyn._native).
+
+Owns: registration. Modules import one way (no cycles):
+  errors <- native <- parameters <- methods/ <- properties <- presets
+  bridge, colliders, outputs <- simulation <- bake <- playback <- ui; operators and cli call
+  simulation / bake / playback lazily.
+"""
 
 bl_info = {
     "name": "hairdyn",
@@ -12,25 +18,69 @@ bl_info = {
     "category": "Physics",
 }
 
+# Every module, dependencies first: a reload (F8, or the add-on re-enabled) reloads them all.
+_MODULES = (
+    "errors",
+    "native",
+    "cache",
+    "hair_formats",
+    "parameters",
+    "bridge",
+    "billboards",
+    "colliders",
+    "methods.base",
+    "methods.follow",
+    "methods.strands",
+    "methods.lcp",
+    "methods",
+    "properties",
+    "outputs",
+    "simulation",
+    "bake",
+    "frame_record",
+    "export",
+    "playback",
+    "operators",
+    "io_import",
+    "presets",
+    "ui",
+)
+
 if "bpy" in locals():
     import importlib
+    import sys
 
-    for _module in (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: F821
-                    simulation, operators, io_import, presets, billboards, export,  # noqa: F821
-                    frame_record, ui):  # noqa: F821
-        importlib.reload(_module)
+    for _name in _MODULES:
+        _module = sys.modules.get(f"{__name__}.{_name}")
+        if _module is not None:
+            importlib.reload(_module)
 
-import bpy
+import bpy  # noqa: E402
 
-from . import (errors, native, cache, hair_formats, properties, bridge, playback,  # noqa: E402
-               simulation, operators, io_import, presets, billboards, export, frame_record, ui)
+from . import (  # noqa: E402, F401 - every module, for the reload above
+    bake,
+    export,
+    frame_record,
+    billboards,
+    bridge,
+    cache,
+    colliders,
+    errors,
+    hair_formats,
+    io_import,
+    methods,
+    native,
+    operators,
+    outputs,
+    parameters,
+    playback,
+    presets,
+    properties,
+    simulation,
+    ui,
+)
 
 classes = (
-    properties.HairdynStrandSettings,
-    properties.HairdynLcpSettings,
-    properties.HairdynCollisionSettings,
-    properties.HairdynColliderItem,
-    properties.HairdynSettings,
     operators.HAIRDYN_OT_simulate,
     operators.HAIRDYN_OT_bake,
     operators.HAIRDYN_OT_free_bake,
@@ -40,24 +90,24 @@ classes = (
     io_import.HAIRDYN_OT_import_cem_hair,
     operators.HAIRDYN_OT_collider_add,
     operators.HAIRDYN_OT_collider_remove,
-    presets.HAIRDYN_MT_presets,
-    presets.HAIRDYN_OT_preset_add,
-    *ui.panel_classes,
 )
 
 
 def register():
+    properties.register()  # the settings groups, generated from the native structs
     for cls in classes:
         bpy.utils.register_class(cls)
-    bpy.types.Object.hairdyn = bpy.props.PointerProperty(type=properties.HairdynSettings)
+    presets.register()
+    ui.register()
     playback.register()
     io_import.register()
-    presets.install_bundled()
 
 
 def unregister():
     io_import.unregister()
     playback.unregister()
-    del bpy.types.Object.hairdyn
+    ui.unregister()
+    presets.unregister()
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)
+    properties.unregister()

@@ -7,6 +7,7 @@ The node group and the material are built once per file and shared; the modifier
 particle output object. Node API differences between Blender versions are detected, not
 guessed from version numbers.
 """
+
 import math
 
 import bpy
@@ -15,9 +16,13 @@ GROUP_NAME = "hairdyn Billboards"
 MATERIAL_NAME = "hairdyn Billboard"
 MODIFIER_NAME = "hairdyn Billboards"
 OPACITY = "hairdyn_opacity"  # per-instance attribute the material reads
-INPUTS = (("Geometry", 'NodeSocketGeometry'), ("Camera", 'NodeSocketObject'),
-          ("Card Width", 'NodeSocketFloat'), ("Card Aspect", 'NodeSocketFloat'),
-          ("Opacity", 'NodeSocketFloat'))
+INPUTS = (
+    ("Geometry", 'NodeSocketGeometry'),
+    ("Camera", 'NodeSocketObject'),
+    ("Card Width", 'NodeSocketFloat'),
+    ("Card Aspect", 'NodeSocketFloat'),
+    ("Opacity", 'NodeSocketFloat'),
+)
 
 
 def _socket(sockets, name):
@@ -39,8 +44,11 @@ def _add_interface(tree):
 def input_identifiers(tree):
     """{input name: the identifier a modifier stores its value under}."""
     if hasattr(tree, "interface"):
-        return {item.name: item.identifier for item in tree.interface.items_tree
-                if item.item_type == 'SOCKET' and item.in_out == 'INPUT'}
+        return {
+            item.name: item.identifier
+            for item in tree.interface.items_tree
+            if item.item_type == 'SOCKET' and item.in_out == 'INPUT'
+        }
     return {socket.name: socket.identifier for socket in tree.inputs}
 
 
@@ -93,8 +101,9 @@ def build_group(material):
     camera = nodes.new("GeometryNodeObjectInfo")
     links.new(group_in.outputs["Camera"], camera.inputs["Object"])
     position = nodes.new("GeometryNodeInputPosition")
-    to_camera = _vector_math(nodes, links, 'SUBTRACT', camera.outputs["Location"],
-                             position.outputs["Position"])
+    to_camera = _vector_math(
+        nodes, links, 'SUBTRACT', camera.outputs["Location"], position.outputs["Position"]
+    )
     d = _vector_math(nodes, links, 'NORMALIZE', to_camera.outputs["Vector"])
     across = _vector_math(nodes, links, 'CROSS_PRODUCT', t, d.outputs["Vector"])
     h = _vector_math(nodes, links, 'NORMALIZE', across.outputs["Vector"])
@@ -111,8 +120,13 @@ def build_group(material):
 
     # Opacity / sin θ, sin θ = |t x d|, at most 1 (Bando 2003 §4).
     sin_theta = _vector_math(nodes, links, 'LENGTH', across.outputs["Vector"])
-    scaled = _math(nodes, links, 'DIVIDE', group_in.outputs["Opacity"],
-                   _math(nodes, links, 'MAXIMUM', sin_theta.outputs["Value"], 1e-3))
+    scaled = _math(
+        nodes,
+        links,
+        'DIVIDE',
+        group_in.outputs["Opacity"],
+        _math(nodes, links, 'MAXIMUM', sin_theta.outputs["Value"], 1e-3),
+    )
     opacity = _math(nodes, links, 'MINIMUM', scaled, 1.0)
     store = nodes.new("GeometryNodeStoreNamedAttribute")
     store.data_type = 'FLOAT'

@@ -203,19 +203,19 @@ def _progress(frame, ms):
 def _bake(args, obj, start, end):
     """Bake into the cache, one progress line per frame; returns the report."""
     import bpy
-    from hairdyn import simulation
+    from hairdyn import bake
 
     settings = obj.hairdyn
     settings.frame_start, settings.frame_end = start, end
     if args.cache:
         settings.cache_directory = str(Path(args.cache).resolve())
     resume_after = end if args.resume else None
-    runner = simulation.start_bake(bpy.context, obj, resume_after)
+    runner = bake.start_bake(bpy.context, obj, resume_after)
     try:
         while not runner.done:
             _progress(*runner.advance())
     finally:
-        report = simulation.finish_bake(runner)
+        report = bake.finish_bake(runner)
     report["cache"] = str(runner.cache.directory)
     return report
 
@@ -247,8 +247,7 @@ def main(argv):
     import bpy
 
     hairdyn = _ensure_addon()
-    from hairdyn import simulation
-    from hairdyn.errors import HairdynError
+    from hairdyn import errors, simulation
 
     try:
         if args.blend:
@@ -271,8 +270,10 @@ def main(argv):
     try:
         report = _bake(args, obj, start, end) if args.command == "bake" else \
             simulation.run(bpy.context, obj, start, end, on_frame=_progress)
-    except HairdynError as error:
-        print(f"hairdyn: error: {error}", file=sys.stderr)
+    except Exception as error:  # noqa: BLE001 - the add-on's error boundary (errors.py)
+        if errors.is_internal(error):
+            errors.print_traceback(error)
+        print(f"hairdyn: error: {errors.message(error)}", file=sys.stderr)
         return RUN_ERROR
     text = json.dumps(report, indent=2)
     if args.report:

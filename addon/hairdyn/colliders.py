@@ -1,4 +1,5 @@
-"""The scene's colliders for one hair object: which meshes, which parts, the native maps.
+"""Owns: the scene's colliders for one hair object: which meshes, which parts, the native
+maps, and which collision settings do what.
 
 By Blender's convention the hair collides with its head (the Curves surface or the particle
 emitter) and with every mesh carrying Blender's Collision modifier; the artist adds more in
@@ -6,12 +7,30 @@ the panel's list (or with --set colliders=A,B). Each collider becomes one native
 whose parts are its vertex groups named in `collider_parts` (head, neck, torso...). Rigid
 motion only updates the collider's transform; a deforming collider is rebuilt each frame.
 """
+
 import time
 
 import numpy as np
 
-from . import bridge, native, properties
+from . import bridge, native, parameters
 from .errors import HairdynError
+
+# The collision settings (the generated CollisionParams group) by what they shape: the fields
+# that build the maps, the report tolerance, and the response (every other field: the reaction
+# constraint, friction, projection). A method shows and reads the kinds it names in
+# Method.collision.
+MAP_FIELDS = ("map_kind", "axis_mode", "azimuth_num", "height_num")
+REPORT_FIELDS = ("penetration_tolerance",)
+
+
+def collision_fields(kind, params_class):
+    """The CollisionParams fields of one kind: "maps", "response" or "report"."""
+    names = [field["name"] for field in parameters.shown_fields(params_class)]
+    if kind == "maps":
+        return [name for name in MAP_FIELDS if name in names]
+    if kind == "report":
+        return [name for name in REPORT_FIELDS if name in names]
+    return [name for name in names if name not in MAP_FIELDS + REPORT_FIELDS]
 
 
 def collider_objects(hair_obj, head, scene):
@@ -21,8 +40,14 @@ def collider_objects(hair_obj, head, scene):
     if settings.use_default_colliders:
         if head is not None:
             found.append(head)
-        found += sorted((o for o in scene.objects if o.type == 'MESH' and
-                         any(m.type == 'COLLISION' for m in o.modifiers)), key=lambda o: o.name)
+        found += sorted(
+            (
+                o
+                for o in scene.objects
+                if o.type == 'MESH' and any(m.type == 'COLLISION' for m in o.modifiers)
+            ),
+            key=lambda o: o.name,
+        )
     found += [item.object for item in settings.colliders if item.object is not None]
     unique = []
     for obj in found:
@@ -55,7 +80,9 @@ class Colliders:
     def __init__(self, hair_obj, head, scene, depsgraph):
         self.native = native.load()
         settings = hair_obj.hairdyn
-        self.params = properties.native_params(settings.collision, self.native.CollisionParams)
+        self.params = parameters.native_params(
+            settings.collision, self.native.CollisionParams, scene
+        )
         self.objects = collider_objects(hair_obj, head, scene)
         self.names = [obj.name for obj in self.objects]
         self.colliders = []
@@ -86,9 +113,11 @@ class Colliders:
                 continue
             mesh = bridge.read_mesh(obj, depsgraph)
             if len(mesh.vertices) != len(self.vertices[index]):
-                raise HairdynError(f"Collider '{obj.name}' changed its vertex count during the "
-                                   "simulation; hairdyn follows deforming colliders of fixed "
-                                   "topology")
+                raise HairdynError(
+                    f"Collider '{obj.name}' changed its vertex count during the "
+                    "simulation; hairdyn follows deforming colliders of fixed "
+                    "topology"
+                )
             if not np.array_equal(mesh.vertices, self.vertices[index]):
                 collider.rebuild(mesh.vertices)
                 rebuild_ms += collider.build_ms

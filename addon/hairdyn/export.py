@@ -116,14 +116,14 @@ def export_bake(context, hair_obj, filepath):
     """Write the baked frames of hair_obj's output Curves (and child hairs) to filepath; its
     suffix picks the format. Returns {"file", "format", "frame_start", "frame_end",
     "objects"}; HairdynError when the bake, the outputs or the exporter are missing."""
-    from . import playback, simulation
+    from . import bake, playback, simulation
     from .cache import Cache
 
     path = Path(bpy.path.abspath(str(filepath))).resolve()
     reason = missing(path.suffix.lower())
     if reason:
         raise HairdynError(reason)
-    cache = Cache.open(simulation.cache_directory(hair_obj))
+    cache = Cache.open(bake.cache_directory(hair_obj))
     frame_start = cache.manifest["frame_start"]
     frame_end = cache.last_contiguous_frame()
     if frame_end is None:
@@ -131,8 +131,7 @@ def export_bake(context, hair_obj, filepath):
     settings = hair_obj.hairdyn
     settings.enabled = settings.use_cache = True
     scene = context.scene
-    with playback.suspended():
-        scene.frame_set(frame_start)
+    simulation.frame_set(scene, frame_start)
     if not playback.load_frame(hair_obj, frame_start):  # creates the output objects
         raise HairdynError(f"The bake of '{hair_obj.name}' cannot be played back")
     objects = [o for o in (settings.output_curves, settings.output_children) if o is not None]

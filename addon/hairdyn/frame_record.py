@@ -242,13 +242,13 @@ class HAIRDYN_OT_open_frame_record(bpy.types.Operator):
 
     @staticmethod
     def plot_path(context):
-        from . import bridge, simulation
+        from . import bake, bridge
         from .errors import HairdynError
 
         if not bridge.is_hair_object(context.object):
             return None
         try:
-            path = simulation.cache_directory(context.object) / PNG_NAME
+            path = bake.cache_directory(context.object) / PNG_NAME
         except HairdynError:
             return None
         return path if path.is_file() else None

@@ -1,8 +1,12 @@
-"""Thin operators: gather from the context, call the simulation, report errors."""
+"""Owns: the operators, thin: gather from the context, call the simulation or the bake, and
+report through the one error boundary (errors.operator_boundary): a user error is an ERROR
+report, anything else an internal-error report with its traceback on the console; a bake that
+fails still records the frames it wrote in its manifest."""
+
 import bpy
 from bpy.props import BoolProperty
 
-from .errors import HairdynError
+from .errors import operator_boundary
 
 
 def _hair_poll(context):
@@ -22,6 +26,7 @@ class HAIRDYN_OT_simulate(bpy.types.Operator):
     def poll(cls, context):
         return _hair_poll(context)
 
+    @operator_boundary
     def execute(self, context):
         from . import simulation
 
@@ -31,16 +36,20 @@ class HAIRDYN_OT_simulate(bpy.types.Operator):
         window_manager = context.window_manager
         window_manager.progress_begin(settings.frame_start, settings.frame_end)
         try:
-            report = simulation.run(context, obj, settings.frame_start, settings.frame_end,
-                                    on_frame=lambda f, _ms: window_manager.progress_update(f))
-        except HairdynError as error:
-            self.report({'ERROR'}, str(error))
-            return {'CANCELLED'}
+            report = simulation.run(
+                context,
+                obj,
+                settings.frame_start,
+                settings.frame_end,
+                on_frame=lambda f, _ms: window_manager.progress_update(f),
+            )
         finally:
             window_manager.progress_end()
             scene.frame_set(frame)
-        self.report({'INFO'}, f"hairdyn: {report['frames']} frames, "
-                              f"{report['ms_per_frame']:.2f} ms per frame")
+        self.report(
+            {'INFO'},
+            f"hairdyn: {report['frames']} frames, {report['ms_per_frame']:.2f} ms per frame",
+        )
         return {'FINISHED'}
 
 
@@ -52,9 +61,11 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
     bl_options = {'REGISTER'}
 
     from_current: BoolProperty(
-        name="From Current Frame", default=False,
+        name="From Current Frame",
+        default=False,
         description="Keep the baked frames before the current frame and bake on from there "
-                    "(resumes a bake that stopped)")
+        "(resumes a bake that stopped)",
+    )
 
     _runner = None
     _timer = None
@@ -64,44 +75,45 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
         return _hair_poll(context)
 
     def _start(self, context):
-        from . import simulation
+        from . import bake
 
         resume_after = context.scene.frame_current - 1 if self.from_current else None
         self._frame = context.scene.frame_current
-        self._runner = simulation.start_bake(context, context.object, resume_after)
+        self._runner = bake.start_bake(context, context.object, resume_after)
 
     def _finish(self, context, cancelled):
-        from . import simulation
+        from . import bake
 
         runner, self._runner = self._runner, None
-        report = simulation.finish_bake(runner)
+        report = bake.finish_bake(runner)
         context.scene.frame_set(self._frame)
         baked = len(runner.cache.frames())
         verb = "Stopped" if cancelled else "Baked"
-        self.report({'WARNING' if cancelled else 'INFO'},
-                    f"{verb}: {baked} frames in the cache, {report['ms_per_frame']:.2f} ms per frame")
+        self.report(
+            {'WARNING' if cancelled else 'INFO'},
+            f"{verb}: {baked} frames in the cache, {report['ms_per_frame']:.2f} ms per frame",
+        )
         return report
 
+    def cleanup(self, context):
+        """After an error: the modal timer off, and the frames baked so far recorded."""
+        if self._timer is not None:
+            self._end_modal(context)
+        if self._runner is not None:
+            self._finish(context, cancelled=True)
+
+    @operator_boundary
     def execute(self, context):
         """Blocking bake (scripts, headless)."""
-        try:
-            self._start(context)
-            while not self._runner.done:
-                self._runner.advance()
-        except HairdynError as error:
-            if self._runner is not None:
-                self._finish(context, cancelled=True)
-            self.report({'ERROR'}, str(error))
-            return {'CANCELLED'}
+        self._start(context)
+        while not self._runner.done:
+            self._runner.advance()
         self._finish(context, cancelled=False)
         return {'FINISHED'}
 
+    @operator_boundary
     def invoke(self, context, _event):
-        try:
-            self._start(context)
-        except HairdynError as error:
-            self.report({'ERROR'}, str(error))
-            return {'CANCELLED'}
+        self._start(context)
         window_manager = context.window_manager
         window_manager.progress_begin(self._runner.frame_start, self._runner.frame_end)
         self._timer = window_manager.event_timer_add(0.001, window=context.window)
@@ -111,10 +123,12 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
     def _end_modal(self, context):
         window_manager = context.window_manager
         window_manager.event_timer_remove(self._timer)
+        self._timer = None
         window_manager.progress_end()
         if context.workspace is not None:
             context.workspace.status_text_set(None)
 
+    @operator_boundary
     def modal(self, context, event):
         if event.type == 'ESC':
             self._end_modal(context)
@@ -123,17 +137,12 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
         if event.type != 'TIMER':
             return {'PASS_THROUGH'}
         runner = self._runner
-        try:
-            frame, ms = runner.advance()
-        except HairdynError as error:
-            self._end_modal(context)
-            self._finish(context, cancelled=True)
-            self.report({'ERROR'}, str(error))
-            return {'CANCELLED'}
+        frame, ms = runner.advance()
         context.window_manager.progress_update(frame)
         if context.workspace is not None:
             context.workspace.status_text_set(
-                f"hairdyn: baking frame {frame} of {runner.frame_end} ({ms:.1f} ms) - Esc stops")
+                f"hairdyn: baking frame {frame} of {runner.frame_end} ({ms:.1f} ms) - Esc stops"
+            )
         if runner.done:
             self._end_modal(context)
             self._finish(context, cancelled=False)
@@ -155,16 +164,13 @@ class HAIRDYN_OT_free_bake(bpy.types.Operator):
     def invoke(self, context, event):
         return context.window_manager.invoke_confirm(self, event)
 
+    @operator_boundary
     def execute(self, context):
-        from . import playback, simulation
+        from . import bake, playback
         from .cache import Cache
 
-        try:
-            directory = simulation.cache_directory(context.object)
-            Cache.open(directory).free()
-        except HairdynError as error:
-            self.report({'ERROR'}, str(error))
-            return {'CANCELLED'}
+        directory = bake.cache_directory(context.object)
+        Cache.open(directory).free()
         playback.forget(directory)
         self.report({'INFO'}, f"Freed the bake in '{directory}'")
         return {'FINISHED'}

@@ -1,5 +1,7 @@
-"""Presets with Blender's preset system: the papers' settings ship with the add-on, and
-artists save their own (the + button next to the preset menu)."""
+"""Owns: presets with Blender's preset system: the papers' settings ship with the add-on, and
+artists save their own (the + button next to the preset menu). What a preset stores is every
+plain value of every settings group (properties.preset_paths), read at registration."""
+
 import shutil
 from pathlib import Path
 
@@ -10,19 +12,6 @@ from . import properties
 
 PRESET_SUBDIR = "hairdyn"
 BUNDLED = Path(__file__).resolve().parent / "presets"
-
-
-def _values():
-    """Every solver setting a preset stores, as Python paths under `settings`."""
-    top = ["settings.method", "settings.use_collision", "settings.use_default_colliders",
-           "settings.collider_parts", "settings.lcp_init", "settings.lcp_scalp_source",
-           "settings.lcp_scalp", "settings.lcp_length_source", "settings.lcp_length_group"]
-    groups = [("strands", properties.HairdynStrandSettings),
-              ("lcp", properties.HairdynLcpSettings),
-              ("collision", properties.HairdynCollisionSettings)]
-    nested = [f"settings.{group}.{name}" for group, cls in groups
-              for name in cls.__annotations__]
-    return top + nested
 
 
 class HAIRDYN_MT_presets(bpy.types.Menu):
@@ -40,7 +29,19 @@ class HAIRDYN_OT_preset_add(AddPresetBase, bpy.types.Operator):
     preset_menu = "HAIRDYN_MT_presets"
     preset_subdir = PRESET_SUBDIR
     preset_defines = ["settings = bpy.context.object.hairdyn"]
-    preset_values = _values()
+    preset_values = []  # filled by register(): the settings groups exist from then on
+
+
+def register():
+    HAIRDYN_OT_preset_add.preset_values = properties.preset_paths()
+    for cls in (HAIRDYN_MT_presets, HAIRDYN_OT_preset_add):
+        bpy.utils.register_class(cls)
+    install_bundled()
+
+
+def unregister():
+    for cls in (HAIRDYN_OT_preset_add, HAIRDYN_MT_presets):
+        bpy.utils.unregister_class(cls)
 
 
 def install_bundled():

@@ -1,7 +1,11 @@
-"""The hairdyn panels in the Physics tab of hair objects: one section per concern."""
+"""Owns: the hairdyn panels in the Physics tab of hair objects. The main panel and the shared
+sections (collision, cache, output) are written here; each method's sections are generated
+from its adapter's `sections` at registration, and the collision settings show only the
+kinds the method reads (colliders.collision_fields)."""
+
 import bpy
 
-from . import bridge, native, playback, presets
+from . import bake, bridge, colliders, methods, native, playback, presets
 from .errors import HairdynError
 
 
@@ -18,12 +22,6 @@ class _HairdynPanel:
 class _SubPanel(_HairdynPanel):
     bl_parent_id = "HAIRDYN_PT_main"
     bl_options = {'DEFAULT_CLOSED'}
-    methods = None  # the methods this section belongs to; None: all
-
-    @classmethod
-    def poll(cls, context):
-        return super().poll(context) and (cls.methods is None or
-                                          context.object.hairdyn.method in cls.methods)
 
     def draw(self, context):
         self.layout.use_property_split = True
@@ -32,10 +30,8 @@ class _SubPanel(_HairdynPanel):
 
 def bake_status(obj):
     """One line: frames baked, ms per frame, the last quality figures."""
-    from . import simulation
-
     try:
-        opened = playback.open_cache(simulation.cache_directory(obj))
+        opened = playback.open_cache(bake.cache_directory(obj))
     except HairdynError as error:
         return str(error)
     if opened is None:
@@ -48,8 +44,10 @@ def bake_status(obj):
     if report:
         text += f", {report['ms_per_frame']:.2f} ms/frame, stretch {report['stretch_max']:.1e}"
         if report.get("collision"):
-            text += (f", penetration {report['penetration_max'] * 1000:.2f} mm "
-                     f"({report['penetration_share'] * 100:.2f}%)")
+            text += (
+                f", penetration {report['penetration_max'] * 1000:.2f} mm "
+                f"({report['penetration_share'] * 100:.2f}%)"
+            )
     return text
 
 
@@ -91,143 +89,73 @@ class HAIRDYN_PT_main(_HairdynPanel, bpy.types.Panel):
         row.operator("hairdyn.open_frame_record", icon='GRAPH', text="")
 
 
-class HAIRDYN_PT_dynamics(_SubPanel, bpy.types.Panel):
-    bl_label = "Dynamics"
-    bl_options = set()
-    methods = {'STRANDS'}
+def section_fields(method, section, group):
+    """The fields a method's section shows: those it names, then with `rest` those of the
+    group no section of the method names."""
+    names = [
+        p.identifier for p in group.bl_rna.properties if p.identifier not in ("rna_type", "name")
+    ]
+    shown = [name for name in section.fields if name in names]
+    if section.rest:
+        named = {
+            name
+            for other in method.sections
+            if other.group == section.group
+            for name in other.fields
+        }
+        shown += [name for name in names if name not in named]
+    return shown
+
+
+def _method_panel(method, index, section):
+    """A sub-panel class for one section of a method."""
+
+    def poll(cls, context):
+        if not bridge.is_hair_object(context.object):
+            return False
+        settings = context.object.hairdyn
+        group = getattr(settings, section.group, None)
+        return (
+            settings.method == method.identifier
+            and group is not None
+            and (section.draw is not None or bool(section_fields(method, section, group)))
+        )
 
     def draw_settings(self, layout, settings):
-        strands = settings.strands
-        layout.prop(strands, "integrator")
-        layout.prop(strands, "substeps")
-        column = layout.column(align=True)
-        column.prop(strands, "k_theta")
-        column.prop(strands, "k_phi")
-        layout.prop(strands, "damping")
-        layout.prop(strands, "line_density")
-        layout.prop(strands, "gravity")
+        if section.draw is not None:
+            section.draw(layout, settings)
+        group = getattr(settings, section.group)
+        for name in section_fields(method, section, group):
+            row = layout.row()
+            active = section.active.get(name)
+            row.active = active is None or bool(active(group))
+            row.prop(group, name)
 
-
-class HAIRDYN_PT_wind(_SubPanel, bpy.types.Panel):
-    bl_label = "Wind"
-    methods = {'STRANDS'}
-
-    def draw_settings(self, layout, settings):
-        strands = settings.strands
-        layout.prop(strands, "wind_speed")
-        layout.prop(strands, "wind_direction")
-        layout.prop(strands, "wind_noise")
-        layout.prop(strands, "wind_noise_frequency")
-        layout.prop(strands, "air_drag")
-
-
-class HAIRDYN_PT_children(_SubPanel, bpy.types.Panel):
-    bl_label = "Child Hairs"
-    methods = {'STRANDS'}
-
-    def draw_settings(self, layout, settings):
-        strands = settings.strands
-        layout.prop(strands, "children_per_guide")
-        layout.prop(strands, "child_mode")
-        row = layout.row()
-        row.active = strands.child_mode == 'CLUSTER'
-        row.prop(strands, "child_spread")
-        layout.prop(strands, "seed")
-
-
-class HAIRDYN_PT_lcp(_SubPanel, bpy.types.Panel):
-    bl_label = "Loosely Connected Particles"
-    bl_options = set()
-    methods = {'LCP'}
-
-    def draw_settings(self, layout, settings):
-        lcp = settings.lcp
-        self.draw_initialisation(layout, settings)
-        column = layout.column(align=True)
-        column.prop(lcp, "particle_spacing")
-        column.prop(lcp, "particle_num")
-        column.prop(lcp, "root_depth")
-        column.prop(lcp, "beam_length")
-        layout.prop(lcp, "substeps")
-        layout.prop(lcp, "implicit_springs")
-        for name in ("h1", "a0", "neighbor_num", "young_modulus", "material_density",
-                     "spring_damping", "hair_density"):
-            layout.prop(lcp, name)
-
-    @staticmethod
-    def draw_initialisation(layout, settings):
-        """Where the particles start (Bando 2003 §3.2): only the rows the choices use."""
-        layout.prop(settings, "lcp_init")
-        if settings.lcp_init == 'GROOM':
-            return
-        obj = settings.id_data
-        head = settings.head or (obj.data.surface if obj.type == 'CURVES' else obj)
-        if head is not None and head.type != 'MESH':
-            head = None
-
-        def vertex_group(name):
-            if head is None:
-                layout.prop(settings, name)
-            else:
-                layout.prop_search(settings, name, head, "vertex_groups")
-
-        layout.prop(settings, "lcp_scalp_source")
-        if settings.lcp_scalp_source == 'GROUP':
-            vertex_group("lcp_scalp")
-        layout.prop(settings, "lcp_length_source")
-        if settings.lcp_length_source == 'IMAGE':
-            layout.prop(settings, "lcp_length_image")
-        elif settings.lcp_length_source == 'WEIGHTS':
-            vertex_group("lcp_length_group")
-
-
-class HAIRDYN_PT_lcp_interactions(_SubPanel, bpy.types.Panel):
-    bl_label = "Hair-Hair Interactions"
-    methods = {'LCP'}
-
-    def draw_settings(self, layout, settings):
-        lcp = settings.lcp
-        layout.prop(lcp, "h2")
-        layout.prop(lcp, "attraction_repulsion")
-        column = layout.column(align=True)
-        column.active = lcp.attraction_repulsion
-        column.prop(lcp, "pressure_stiffness")
-        column.prop(lcp, "rest_density")
-        layout.prop(lcp, "hair_collision")
-        row = layout.row()
-        row.active = lcp.hair_collision
-        row.prop(lcp, "collision_damping")
-        layout.prop(lcp, "hair_friction")
-        row = layout.row()
-        row.active = lcp.hair_friction
-        row.prop(lcp, "friction_damping")
-
-
-class HAIRDYN_PT_lcp_forces(_SubPanel, bpy.types.Panel):
-    bl_label = "Forces and Wind"
-    methods = {'LCP'}
-
-    def draw_settings(self, layout, settings):
-        lcp = settings.lcp
-        for name in ("gravity", "air_friction", "body_friction", "wind_speed", "wind_heading",
-                     "wind_particle_spacing", "wind_drag", "air_density"):
-            layout.prop(lcp, name)
-
-
-class HAIRDYN_PT_lcp_initial(_SubPanel, bpy.types.Panel):
-    bl_label = "Initial Shape"
-    methods = {'LCP'}
-
-    def draw_settings(self, layout, settings):
-        lcp = settings.lcp
-        for name in ("max_length", "root_tangent_weight", "root_normal_weight", "whorl_u",
-                     "whorl_v", "seed"):
-            layout.prop(lcp, name)
+    return type(
+        f"HAIRDYN_PT_{method.identifier.lower()}_{index}",
+        (_SubPanel, bpy.types.Panel),
+        {
+            "bl_label": section.label,
+            "bl_options": set() if section.open else {'DEFAULT_CLOSED'},
+            "poll": classmethod(poll),
+            "draw_settings": draw_settings,
+        },
+    )
 
 
 class HAIRDYN_UL_colliders(bpy.types.UIList):
-    def draw_item(self, _context, layout, _data, item, _icon, _active_data, _active_prop,
-                  _index=0, _flt_flag=0):
+    def draw_item(
+        self,
+        _context,
+        layout,
+        _data,
+        item,
+        _icon,
+        _active_data,
+        _active_prop,
+        _index=0,
+        _flt_flag=0,
+    ):
         layout.prop(item, "object", text="", emboss=False, icon='MESH_DATA')
 
 
@@ -241,23 +169,22 @@ class HAIRDYN_PT_collision(_SubPanel, bpy.types.Panel):
         layout.active = settings.use_collision
         layout.prop(settings, "use_default_colliders")
         row = layout.row()
-        row.template_list("HAIRDYN_UL_colliders", "", settings, "colliders", settings,
-                          "collider_index", rows=2)
+        row.template_list(
+            "HAIRDYN_UL_colliders", "", settings, "colliders", settings, "collider_index", rows=2
+        )
         buttons = row.column(align=True)
         buttons.operator("hairdyn.collider_add", icon='ADD', text="")
         buttons.operator("hairdyn.collider_remove", icon='REMOVE', text="")
         layout.prop(settings, "collider_parts")
-        collision = settings.collision
-        layout.prop(collision, "map_kind")
-        layout.prop(collision, "axis_mode")
-        column = layout.column(align=True)
-        column.prop(collision, "azimuth_num")
-        column.prop(collision, "height_num")
-        layout.prop(collision, "stiffness")
-        layout.prop(collision, "damping")
-        layout.prop(collision, "friction")
-        layout.prop(collision, "projection_tolerance")
-        layout.prop(collision, "penetration_tolerance")
+        method = methods.get(settings.method)
+        collision = getattr(settings, "collision", None)
+        if method is None or collision is None:
+            return
+        for kind in ("maps", "response", "report"):
+            if kind in method.collision:
+                column = layout.column(align=kind == "maps")
+                for name in colliders.collision_fields(kind, native.load().CollisionParams):
+                    column.prop(collision, name)
 
 
 class HAIRDYN_PT_cache(_SubPanel, bpy.types.Panel):
@@ -275,13 +202,37 @@ class HAIRDYN_PT_output(_SubPanel, bpy.types.Panel):
     def draw_settings(self, layout, settings):
         layout.prop(settings, "output_curves")
         layout.prop(settings, "output_points")
-        if settings.method == 'LCP':
-            layout.prop(settings, "use_billboards")
-        if settings.method == 'STRANDS':
-            layout.prop(settings, "output_children")
+        method = methods.get(settings.method)
+        for name in method.shows if method is not None else ():
+            layout.prop(settings, name)
 
 
-panel_classes = (HAIRDYN_UL_colliders, HAIRDYN_PT_main, HAIRDYN_PT_dynamics, HAIRDYN_PT_wind,
-                 HAIRDYN_PT_children, HAIRDYN_PT_lcp, HAIRDYN_PT_lcp_interactions,
-                 HAIRDYN_PT_lcp_forces, HAIRDYN_PT_lcp_initial, HAIRDYN_PT_collision,
-                 HAIRDYN_PT_cache, HAIRDYN_PT_output)
+_registered = []
+
+
+def panel_classes():
+    """Every class this module registers, in panel order."""
+    generated = [
+        _method_panel(method, index, section)
+        for method in methods.all_methods()
+        for index, section in enumerate(method.sections)
+    ]
+    return (
+        HAIRDYN_UL_colliders,
+        HAIRDYN_PT_main,
+        *generated,
+        HAIRDYN_PT_collision,
+        HAIRDYN_PT_cache,
+        HAIRDYN_PT_output,
+    )
+
+
+def register():
+    for cls in panel_classes():
+        bpy.utils.register_class(cls)
+        _registered.append(cls)
+
+
+def unregister():
+    while _registered:
+        bpy.utils.unregister_class(_registered.pop())

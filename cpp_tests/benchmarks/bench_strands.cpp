@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "core/parallel.hh"
-#include "strands/strand_dynamics_kurihara1993.hh"
+#include "strands/strand_solver.hh"
 
 using namespace hairdyn;
 
@@ -47,8 +47,9 @@ static void BM_StrandStep(benchmark::State &state)
   make_groom(strands_num, segments_num, offsets, positions);
   StrandParams params;
   params.integrator = Integrator(state.range(2));
-  params.wind_speed = 2.0f;
-  StrandSolver solver(offsets, positions, mat4(1.0f), {}, params);
+  WindParams wind;
+  wind.speed = 2.0f;
+  StrandSolver solver(offsets, positions, mat4(1.0f), {}, params, wind);
   int frame = 0;
   for (auto _ : state) {
     const float t = float(frame++) / 24.0f;

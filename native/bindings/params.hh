@@ -79,8 +79,7 @@ template<typename T> T convert_field(const py::handle value, const ParamInfo &in
 {
   if constexpr (std::is_same_v<T, vec3>) {
     if (!py::isinstance<py::sequence>(value) || py::isinstance<py::str>(value) ||
-        py::len(value) != 3)
-    {
+        py::len(value) != 3) {
       throw py::value_error(std::string(info.name) + " must be a sequence of 3 numbers, not " +
                             std::string(py::str(py::repr(value))));
     }
@@ -112,7 +111,7 @@ template<typename Params, typename T> T convert_param(T Params::*member, const p
  * `Params(**fields)`, `to_dict()` and the static `fields()` table (name, symbol, unit, min,
  * max, default, description, choices, display_scale, display_unit, soft_min, soft_max, label). */
 template<typename Params> py::class_<Params> bind_params(py::module_ &m, const char *name,
-                                                        const char *doc)
+                                                         const char *doc)
 {
   py::class_<Params> cls(m, name, doc);
   Params::for_each_field([&](auto member, const ParamInfo &info) {

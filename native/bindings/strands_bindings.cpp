@@ -7,7 +7,7 @@
 #include "groom/children_kurihara1993.hh"
 #include "groom/frames.hh"
 #include "groom/groom.hh"
-#include "strands/strand_dynamics_kurihara1993.hh"
+#include "strands/strand_solver.hh"
 
 namespace hairdyn::bindings {
 
@@ -48,6 +48,12 @@ void bind_strands(py::module_ &m)
 {
   bind_params<StrandParams>(m, "StrandParams",
                             "Parameters of the Strands method (Kurihara 1993; Ward & Lin 2003).");
+  bind_params<WindParams>(m, "WindParams",
+                          "The wind every method feels: a mean plus smooth turbulence.");
+  py::class_<SubstepPass>(m, "SubstepPass",
+                          "A groom-wide pass the strand solver runs after every substep "
+                          "(volume, hair-hair collision, level of detail).")
+      .def_property_readonly("name", [](const SubstepPass &self) { return std::string(self.name()); });
 
   m.def(
       "root_frames",
@@ -74,17 +80,18 @@ void bind_strands(py::module_ &m)
       "explicitly or implicitly (Ward & Lin 2003, appendix A).")
       .def(py::init([](const py::handle curve_offsets, const py::handle rest_positions_wo,
                        const py::handle head_to_world_rest, const py::handle root_normals_wo,
-                       const StrandParams &params) {
+                       const StrandParams &params, const WindParams &wind) {
              const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
              const Span<vec3> rest = as_float3(rest_positions_wo, "rest_positions_wo");
              check_groom(offsets, rest);
              const Span<vec3> normals = as_root_normals(root_normals_wo, offsets.size() - 1);
              const mat4 head = as_matrix(head_to_world_rest, "head_to_world_rest");
              py::gil_scoped_release release;
-             return new StrandSolver(offsets, rest, head, normals, params);
+             return new StrandSolver(offsets, rest, head, normals, params, wind);
            }),
            py::arg("curve_offsets"), py::arg("rest_positions_wo"), py::arg("head_to_world_rest"),
-           py::arg("root_normals_wo") = py::none(), py::arg("params") = StrandParams())
+           py::arg("root_normals_wo") = py::none(), py::arg("params") = StrandParams(),
+           py::arg("wind") = WindParams())
       .def(
           "step",
           [](StrandSolver &self, const double frame_dt, const py::handle head_to_world) {
@@ -117,6 +124,30 @@ void bind_strands(py::module_ &m)
           "params", [](const StrandSolver &self) { return self.params(); },
           [](StrandSolver &self, const StrandParams &params) { self.set_params(params); },
           "A copy of the parameters; assign a StrandParams to change them between steps.")
+      .def_property(
+          "wind", [](const StrandSolver &self) { return self.wind(); },
+          [](StrandSolver &self, const WindParams &wind) { self.set_wind(wind); },
+          "A copy of the wind; assign a WindParams to change it between steps.")
+      .def(
+          "add_pass",
+          [](StrandSolver &self, SubstepPass *pass) {
+            if (pass == nullptr) {
+              fail("add_pass needs a SubstepPass, not None");
+            }
+            self.add_pass(pass);
+          },
+          py::arg("substep_pass"), py::keep_alive<1, 2>(),
+          "Run substep_pass after every substep, after the passes added before (kept alive by "
+          "the solver).")
+      .def("clear_passes", &StrandSolver::clear_passes, "Remove every pass.")
+      .def("pass_ms", &StrandSolver::pass_ms, py::arg("name"),
+           "Milliseconds the pass of that name took during the last step (0 if none has it).")
+      .def_property_readonly(
+          "diverged_num", &StrandSolver::diverged_num,
+          "Strands whose state became non-finite or ran away (faster than 1 km/s) in the last "
+          "step; they were put back on their rest shape. Non-zero: fail the frame, the "
+          "settings are unstable (explicit integrator with stiff hinges: more substeps or the "
+          "implicit integrator).")
       .def(
           "set_colliders",
           [](StrandSolver &self, const ColliderSet *colliders, const CollisionParams &params) {

@@ -50,33 +50,41 @@ struct CollisionParams {
   {
     fn(&CollisionParams::azimuth_num,
        ParamInfo{"azimuth_num", "m", "", 4, 4096,
-                 "Azimuth samples of each collision map (Kurihara 1993, eq. 8; the paper uses 40)"});
+                 "Azimuth samples of each collision map (Kurihara 1993, eq. 8; the paper uses 40)"}
+           .labeled("Map Columns"));
     fn(&CollisionParams::height_num,
        ParamInfo{"height_num", "n", "", 4, 4096,
-                 "Height (cylinder) or polar (sphere) samples of each collision map (Kurihara 1993, eq. 8; the paper uses 40)"});
+                 "Height (cylinder) or polar (sphere) samples of each collision map (Kurihara 1993, eq. 8; the paper uses 40)"}
+           .labeled("Map Rows"));
     fn(&CollisionParams::map_kind,
        ParamInfo{"map_kind", "", "", 0, 2,
                  "Map per collider part: automatic (smaller error against the mesh), cylindrical (Kurihara 1993 §3.1) or spherical (§5)",
-                 "auto,cylinder,sphere"});
+                 "auto,cylinder,sphere"}
+           .labeled("Map"));
     fn(&CollisionParams::axis_mode,
        ParamInfo{"axis_mode", "", "", 0, 3,
                  "Map axis: fitted principal axis of the part, or a local axis of the collider object",
-                 "fitted,object_x,object_y,object_z"});
+                 "fitted,object_x,object_y,object_z"}
+           .labeled("Axis"));
     fn(&CollisionParams::stiffness,
        ParamInfo{"stiffness", "k", "1/s²", 0.0, 1.0e9,
-                 "Strength of the reaction constraint pulling a node to the surface (Kurihara 1993, eq. 13)"});
+                 "Strength of the reaction constraint pulling a node to the surface (Kurihara 1993, eq. 13)"}
+           .soft(0.0, 1.0e6));
     fn(&CollisionParams::damping,
        ParamInfo{"damping", "c", "1/s", 0.0, 1.0e6,
-                 "Damping of the normal velocity in the reaction constraint; 0 uses the paper's c = √(2k) (Kurihara 1993, eq. 13)"});
+                 "Damping of the normal velocity in the reaction constraint; 0 uses the paper's c = √(2k) (Kurihara 1993, eq. 13)"}
+           .soft(0.0, 1000.0));
     fn(&CollisionParams::friction,
        ParamInfo{"friction", "μ", "", 0.0, 10.0,
-                 "Coulomb friction against colliders; 0 reproduces Kurihara 1993 (an extension of eq. 14)"});
+                 "Coulomb friction against colliders; 0 reproduces Kurihara 1993 (an extension of eq. 14)"}
+           .soft(0.0, 2.0));
     fn(&CollisionParams::projection_tolerance,
        ParamInfo{"projection_tolerance", "", "", 0.0, 1.0,
                  "Nodes deeper than this share of the collider's size (bounding-box diagonal) are put back on the surface (Ward & Lin 2003 §5.5)"});
     fn(&CollisionParams::penetration_tolerance,
        ParamInfo{"penetration_tolerance", "", "", 0.0, 1.0,
-                 "Depth, as a share of the collider's size (bounding-box diagonal), counted as penetration in the report"});
+                 "Depth, as a share of the collider's size (bounding-box diagonal), counted as penetration in the report"}
+           .labeled("Report Tolerance"));
   }
 };
 

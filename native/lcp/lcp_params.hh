@@ -65,10 +65,12 @@ struct LcpParams {
   {
     fn(&LcpParams::particle_spacing,
        ParamInfo{"particle_spacing", "r", "m", 1e-4, 1.0,
-                 "Poisson-disc radius of the particles in the (u, v, s) distance of eq. 3"});
+                 "Poisson-disc radius of the particles in the (u, v, s) distance of eq. 3"}
+           .labeled("Particle Spacing"));
     fn(&LcpParams::particle_num,
        ParamInfo{"particle_num", "N", "", 0, 10000000,
-                 "Target particle count (0: as many as the spacing allows)"});
+                 "Target particle count (0: as many as the spacing allows)"}
+           .labeled("Particle Count"));
     fn(&LcpParams::root_depth,
        ParamInfo{"root_depth", "s_r", "m", 0.0, 1.0,
                  "Depth of the fixed root particles beneath the scalp (§3.2)"});
@@ -82,9 +84,11 @@ struct LcpParams {
        ParamInfo{"root_normal_weight", "w_n", "", 0.0, 100.0,
                  "Normal weight of the root direction, eq. 4"});
     fn(&LcpParams::whorl_u, ParamInfo{"whorl_u", "u_w", "", 0.0, 1.0,
-                                      "u of the hair whorl centre on the scalp (eq. 4)"});
+                                      "u of the hair whorl centre on the scalp (eq. 4)"}
+           .labeled("Whorl U"));
     fn(&LcpParams::whorl_v, ParamInfo{"whorl_v", "v_w", "", 0.0, 1.0,
-                                      "v of the hair whorl centre on the scalp (eq. 4)"});
+                                      "v of the hair whorl centre on the scalp (eq. 4)"}
+           .labeled("Whorl V"));
     fn(&LcpParams::beam_length,
        ParamInfo{"beam_length", "b", "m", 1e-3, 100.0,
                  "Bending length (EI/λg)^(1/3) of the cantilever-beam initial shape (Anjyo 1992)"});
@@ -92,17 +96,21 @@ struct LcpParams {
                                    "Random seed of the Poisson-disc sampling"});
     fn(&LcpParams::h1,
        ParamInfo{"h1", "h₁", "m", 1e-5, 1.0,
-                 "Smoothing length of the connections: pairs within 2h₁ at rest (eq. 7)"});
+                 "Smoothing length of the connections: pairs within 2h₁ at rest (eq. 7)"}
+           .labeled("Connection Radius"));
     fn(&LcpParams::a0, ParamInfo{"a0", "a₀", "", 0.0, 1.0,
-                                 "Alignment threshold: pairs with a_ij < a₀ are dropped (eq. 6)"});
+                                 "Alignment threshold: pairs with a_ij < a₀ are dropped (eq. 6)"}
+           .labeled("Alignment Threshold"));
     fn(&LcpParams::neighbor_num,
        ParamInfo{"neighbor_num", "N_n", "", 1, 1000,
-                 "Connections kept per particle, strongest c_ij W(l_ij, h₁) first (§3.2)"});
+                 "Connections kept per particle, strongest c_ij W(l_ij, h₁) first (§3.2)"}
+           .labeled("Connections per Particle"));
     /* Above ~1e10 Pa the springs' linear system is beyond single precision (measured: a
      * head cap tears apart at 1e11 Pa, holds at 1e10 Pa). */
     fn(&LcpParams::young_modulus,
        ParamInfo{"young_modulus", "E", "Pa", 0.0, 1e9,
-                 "Tensile Young's modulus kept constant per particle (eq. 10-14)"});
+                 "Tensile Young's modulus kept constant per particle (eq. 10-14)"}
+           .labeled("Young's Modulus"));
     fn(&LcpParams::material_density,
        ParamInfo{"material_density", "δ", "kg/m³", 1.0, 1e5,
                  "Density of the hair material, giving the cross-section A_i (eq. 9)"});
@@ -117,12 +125,15 @@ struct LcpParams {
        ParamInfo{"hair_density", "ρ_h", "kg/m³", 1e-3, 1e4,
                  "Mass of hair per volume of the hair region; sets the particle mass m_i"});
     fn(&LcpParams::h2, ParamInfo{"h2", "h₂", "m", 1e-5, 1.0,
-                                 "Smoothing length of hair-hair interactions (eq. 1, 16-18)"});
+                                 "Smoothing length of hair-hair interactions (eq. 1, 16-18)"}
+           .labeled("Interaction Radius"));
     fn(&LcpParams::attraction_repulsion,
-       ParamInfo{"attraction_repulsion", "", "", 0, 1, "Apply attraction/repulsion (eq. 16)"});
+       ParamInfo{"attraction_repulsion", "", "", 0, 1, "Apply attraction/repulsion (eq. 16)"}
+           .labeled("Attraction and Repulsion"));
     fn(&LcpParams::pressure_stiffness,
        ParamInfo{"pressure_stiffness", "k_a", "m²/s²", 0.0, 1e4,
-                 "Magnitude of the attraction/repulsion, P = k_a(ρ − ρ₀) (eq. 16)"});
+                 "Magnitude of the attraction/repulsion, P = k_a(ρ − ρ₀) (eq. 16)"}
+           .labeled("Attraction Strength"));
     fn(&LcpParams::rest_density,
        ParamInfo{"rest_density", "ρ₀", "kg/m³", 0.0, 1e5,
                  "Average hair density kept by eq. 16: small is repulsive, large cohesive"});

@@ -231,14 +231,15 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
                              forces_, damped_forces_, damping_);
   }
   /* Hair-hair interactions, eq. 16-18. */
-  const HairInteractionSettings interactions{params_.h2,
-                                             params_.attraction_repulsion,
-                                             params_.pressure_stiffness,
-                                             params_.rest_density,
-                                             params_.hair_collision,
-                                             params_.collision_damping,
-                                             params_.hair_friction,
-                                             params_.friction_damping};
+  HairInteractionSettings interactions;
+  interactions.h2 = params_.h2;
+  interactions.attraction_repulsion = params_.attraction_repulsion;
+  interactions.pressure_stiffness = params_.pressure_stiffness;
+  interactions.rest_density = params_.rest_density;
+  interactions.collision = params_.hair_collision;
+  interactions.collision_damping = params_.collision_damping;
+  interactions.friction = params_.hair_friction;
+  interactions.friction_damping = params_.friction_damping;
   accumulate_hair_interactions(x_head_, v_head_, t_head_, masses_, density_, neighbors_,
                                interactions, forces_, damped_forces_, damping_);
   if (params_.wind_speed > 0.0f) {

@@ -41,17 +41,9 @@ struct StrandParams {
   /* kg/m, c (eq. 2): mass per length; moment of inertia I = c d³ / 3 of a segment of length d
    * about its hinge. */
   float line_density = 5e-6f;
-  /* m/s², |g| (eq. 6): gravity along world −Z. */
-  float gravity = 9.81f;
-  /* m/s, wind speed (eq. 6, f): the air's velocity is wind_speed · wind_direction. */
-  float wind_speed = 0.0f;
-  /* Unit-less direction the wind blows toward, in world space (normalised by the solver; the
-   * zero vector means no wind). Default: toward +Y, from the front of a Blender face. */
-  vec3 wind_direction = vec3(0.0f, 1.0f, 0.0f);
-  /* Relative amount of smooth turbulence added to the wind (0 = steady). */
-  float wind_noise = 0.3f;
-  /* Hz, frequency of the wind turbulence. */
-  float wind_noise_frequency = 0.5f;
+  /* m/s², g (eq. 6): gravitational acceleration in world space; the add-on fills it from the
+   * scene's gravity. The wind is core/wind.hh's WindParams, shared by every method. */
+  vec3 gravity = vec3(0.0f, 0.0f, -9.81f);
   /* N·s/m², c_air (eq. 6, f = c_air (v_wind − v)): air drag per length and relative speed.
    * It carries the wind and damps every motion through the air. */
   float air_drag = 5e-5f;
@@ -64,7 +56,7 @@ struct StrandParams {
   ChildMode child_mode = ChildMode::Cluster;
   /* m, radius around a guide's root within which its children take root. */
   float child_spread = 0.01f;
-  /* Seed of the wind turbulence and of the child roots: equal seeds give equal bakes. */
+  /* Seed of the child roots: equal seeds give equal bakes. */
   int32_t seed = 0;
 
   template<typename Fn> static void for_each_field(Fn &&fn)
@@ -82,20 +74,9 @@ struct StrandParams {
        ParamInfo{"line_density", "c", "kg/m", 1e-9, 1.0,
                  "Mass per length of a strand; sets the moment of inertia (Kurihara 1993, eq. 2)"});
     fn(&StrandParams::gravity,
-       ParamInfo{"gravity", "g", "m/s²", 0.0, 100.0,
-                 "Gravitational acceleration along world -Z (Kurihara 1993, eq. 6)"});
-    fn(&StrandParams::wind_speed,
-       ParamInfo{"wind_speed", "|f|", "m/s", 0.0, 100.0,
-                 "Speed of the wind (Kurihara 1993, eq. 6)"});
-    fn(&StrandParams::wind_direction,
-       ParamInfo{"wind_direction", "", "", -1.0, 1.0,
-                 "World direction the wind blows toward (normalised; zero means no wind)"});
-    fn(&StrandParams::wind_noise,
-       ParamInfo{"wind_noise", "", "", 0.0, 10.0,
-                 "Relative amount of smooth turbulence added to the wind"});
-    fn(&StrandParams::wind_noise_frequency,
-       ParamInfo{"wind_noise_frequency", "", "Hz", 0.0, 100.0,
-                 "Frequency of the wind's turbulence"});
+       ParamInfo{"gravity", "g", "m/s²", -100.0, 100.0,
+                 "Gravitational acceleration in world space, from the scene (Kurihara 1993, "
+                 "eq. 6)"});
     fn(&StrandParams::air_drag,
        ParamInfo{"air_drag", "c_air", "N·s/m²", 0.0, 1.0,
                  "Air drag per length and relative speed; carries the wind (Kurihara 1993, eq. 6)"});
@@ -119,7 +100,7 @@ struct StrandParams {
                  "Radius around a guide's root within which its children take root"});
     fn(&StrandParams::seed,
        ParamInfo{"seed", "", "", 0.0, 2147483647.0,
-                 "Seed of the wind turbulence and of the child roots"});
+                 "Seed of the child hairs' roots"});
   }
 };
 

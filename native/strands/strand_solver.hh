@@ -1,12 +1,14 @@
 #pragma once
-/* Strand dynamics of Kurihara, Anjyo and Thalmann 1993 (§2): each strand is a chain of rigid
- * segments of fixed length whose shape is the angles between them; the angles obey
+/* The strand solver: strands as chains of rigid segments whose shape is the two hinge angles
+ * of each segment in its parent's frame (Kurihara, Anjyo and Thalmann 1993, §2). Segments
+ * never stretch; the root is carried by the head. One solver, two models of the per-strand
+ * dynamics (StrandModel): Kurihara 1993's per-hinge equations (strand_dynamics_kurihara1993.cpp)
+ * and the articulated chain (strand_dynamics_articulated.cpp). Everything else is shared:
+ * external forces, collision, passes, divergence checks.
  *
- *   I θ̈ + γ θ̇ = M,   I φ̈ + γ φ̇ = M                      (Kurihara 1993, eq. 1)
- *
- * with hinge springs toward the rest angles (eq. 4) and external torques from gravity, wind and
- * the head's acceleration (eq. 5–6), solved segment by segment from root to tip. Integration is
- * explicit (eq. 7) or implicit backward Euler (Ward & Lin 2003, appendix A).
+ * Each substep every strand advances, then the registered SubstepPass list runs over the node
+ * positions and velocities (substep_pass.hh), then the solver takes the corrected nodes back
+ * into its angles and rates root to tip (lengths kept, roots kinematic).
  *
  * Coordinates. Segment i's frame F_i has z along the segment. At rest, F_0 is the root frame
  * (root normal + a deterministic tangent) and F_i is F_{i-1} transported without twist onto
@@ -21,59 +23,47 @@
  * Kurihara puts the pole on the parent segment, where every straight strand sits and the
  * azimuth is undefined; placing it a quarter turn from rest keeps both angles regular (metric
  * factor cos²θ ≈ 1) around any rest shape. Both angles are stored as offsets from rest, so
- * the springs of eq. 4 are −k θ and −k φ.
- *
- * Positions are rebuilt from the angles root to tip, so no segment ever changes length.
+ * the hinge springs (Kurihara 1993, eq. 4) are −k θ and −k φ. D = R_x(−φ) R_y(θ): the hinge
+ * turns the segment about e_φ at rate θ̇ and about the chart's −x at rate φ̇.
  *
  * Data is a struct of arrays over points (Blender's layout): per-segment quantities are
  * stored at the segment's tip point; a strand's root slot holds nothing. */
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "collision/collider.hh"
 #include "collision/reaction_constraint_kurihara1993.hh"
+#include "core/head_motion.hh"
 #include "core/math.hh"
 #include "core/span.hh"
-#include "strands/head_motion.hh"
+#include "core/wind.hh"
 #include "strands/hinge_integration.hh"
 #include "strands/strand_params.hh"
+#include "strands/substep_pass.hh"
 
 namespace hairdyn {
 
 using glm::vec2;
 
-/* The wind as a field of air velocity: a uniform mean plus smooth turbulence that travels
- * with it (deterministic for a seed). */
-class WindField {
- public:
-  WindField() = default;
-  explicit WindField(const StrandParams &params);
-  /* m/s, the air's velocity at world point p and time t. */
-  vec3 velocity_at(const vec3 &p, float time) const;
-
- private:
-  static constexpr int waves_num = 2; /* Sine waves per component of the turbulence. */
-  vec3 mean_ = vec3(0.0f);
-  float turbulence_ = 0.0f; /* m/s, amplitude of each component. */
-  vec3 wave_vectors_[3][waves_num] = {};
-  float angular_frequencies_[3][waves_num] = {};
-  float phases_[3][waves_num] = {};
-};
-
-/* The external force per length on a strand element (Kurihara 1993, eq. 6) during one
- * substep: gravity and the head's inertial force, an affine function of position, plus the
- * air's drag toward the wind's velocity. */
+/* The external force per length on a strand element during one substep (Kurihara 1993,
+ * eq. 6): gravity, the head's fictitious force −c a_rel(r, v_rel) (transport and Coriolis,
+ * core/head_motion.hh) and air drag toward the wind, c_air (v_wind − v). All are affine in the
+ * element's position r and velocity v: F / length = base + G r + V v + c_air v_wind. */
 struct ForceField {
-  vec3 base = vec3(0.0f);      /* N/m */
-  mat3 gradient = mat3(0.0f);  /* N/m², from the head's turning */
-  float air_drag = 0.0f;       /* N·s/m², c_air */
+  vec3 base = vec3(0.0f);             /* N/m */
+  mat3 position_gradient = mat3(0.0f); /* G, N/m² */
+  mat3 velocity_gradient = mat3(0.0f); /* V, N·s/m² */
+  float air_drag = 0.0f;              /* c_air, N·s/m² */
 
   ForceField() = default;
-  ForceField(const StrandParams &params, const HeadAcceleration &head);
+  ForceField(const StrandParams &params, float line_density, const HeadAcceleration &head,
+             const HeadVelocity &head_velocity);
 
   /* N, the force on a segment of length d whose centre is at r, moving at v. */
   vec3 on_segment(const float d, const vec3 &r, const vec3 &v, const vec3 &wind) const
   {
-    return d * (base + gradient * r + air_drag * (wind - v));
+    return d * (base + position_gradient * r + velocity_gradient * v + air_drag * wind);
   }
 };
 
@@ -85,6 +75,7 @@ struct Substep {
   float time = 0.0f; /* s, simulated time at its end (for the wind) */
   HeadPose pose;     /* the head at its end */
   mat3 rotation = mat3(1.0f);
+  HeadVelocity head_velocity; /* the head's velocity over the frame */
   ForceField forces;
 };
 
@@ -96,7 +87,7 @@ class StrandSolver {
    * find_groom_error. */
   StrandSolver(Span<int32_t> curve_offsets, Span<vec3> rest_positions_wo,
                const mat4 &head_to_world_rest, Span<vec3> root_normals_wo,
-               const StrandParams &params);
+               const StrandParams &params, const WindParams &wind = WindParams());
 
   /* Advances one frame of `frame_dt` seconds in params().substeps substeps, the head moving
    * from its previous transform to `head_to_world`. */
@@ -109,15 +100,31 @@ class StrandSolver {
 
   const StrandParams &params() const { return params_; }
   void set_params(const StrandParams &params);
+  const WindParams &wind() const { return wind_params_; }
+  void set_wind(const WindParams &wind);
   /* Hair–object collision (Kurihara 1993 §3; Ward & Lin 2003 §5.5): every node's force passes
    * the reaction constraint where the node is inside a collider, and no node ends a substep
    * deeper than params.projection_tolerance × the colliders' size. The colliders are the
    * caller's and must stay alive while the solver steps; nullptr turns collision off. */
   void set_colliders(const ColliderSet *colliders, const CollisionParams &params);
+  /* Passes run in order after every substep (substep_pass.hh). The passes are the caller's
+   * and must stay alive while the solver steps. */
+  void add_pass(SubstepPass *pass);
+  void clear_passes();
+  Span<SubstepPass *> passes() const { return passes_; }
+  /* Milliseconds the pass named `name` took during the last step (all substeps); 0 for a
+   * name no pass has. */
+  double pass_ms(const std::string &name) const;
+
   /* Nodes whose force the reaction constraint changed, and nodes put back on the surface,
    * during the last step (all substeps). */
   int64_t contacts_num() const { return contacts_num_; }
   int64_t projections_num() const { return projections_num_; }
+  /* Strands whose state became non-finite or ran away (a node faster than
+   * runaway_speed) during the last step. Such a strand is put back on its rest shape carried
+   * by the head, so no NaN ever leaves the solver; the caller should fail the frame. */
+  int64_t diverged_num() const { return diverged_num_; }
+  static constexpr float runaway_speed = 1000.0f; /* m/s: no hair moves this fast. */
 
   int64_t curves_num() const { return int64_t(curve_offsets_.size()) - 1; }
   Span<int32_t> curve_offsets() const { return curve_offsets_; }
@@ -139,14 +146,43 @@ class StrandSolver {
   float segment_length(int64_t point) const { return rest_lengths_[size_t(point)]; }
 
  private:
+  struct Counts {
+    int64_t contacts = 0;
+    int64_t projections = 0;
+    int64_t diverged = 0;
+  };
+
   /* Zero angles and rates, the head at `pose` and still. */
   void reset_dynamics(const HeadPose &pose);
-  /* The integrator's coefficients of each segment for substeps of length h. */
-  void prepare_hinges(IndexRange points, float h);
-  /* Steps one strand through the substeps; returns (contacts, projections). */
-  std::pair<int64_t, int64_t> step_strand(int64_t curve, Span<Substep> substeps);
+  /* Strand `curve` on its rest shape carried by the head at `pose`, at rest. */
+  void place_at_rest(int64_t curve, const HeadPose &pose);
+  /* Per-strand coefficients that stay fixed over one step of substeps of length h. */
+  void prepare_strand(int64_t curve, float h);
+  /* One substep of one strand: the root carried by the head, then the model's dynamics.
+   * Returns false when the strand diverged (it is then put back at rest). */
+  bool advance_strand(int64_t curve, const Substep &substep, Counts &counts);
+  /* Kurihara 1993 §2: each hinge alone (strand_dynamics_kurihara1993.cpp). */
+  bool advance_kurihara(IndexRange points, const Substep &substep, mat3 frame,
+                        vec3 node_velocity, const vec3 &wind_wo, Counts &counts);
+  /* False when a node of the strand is not finite or faster than runaway_speed. */
+  bool strand_is_sane(int64_t curve) const;
+  /* Positions and velocities after passes back into angles and rates, root to tip. */
+  void take_back_strand(int64_t curve, const Substep &substep);
+
+  /* The force on the segment ending at point i (centre `center` moving at `center_velocity`),
+   * filtered by the reaction constraint where its tip (at `tip`, moving at `tip_velocity`) is
+   * inside a collider: Kurihara 1993, eq. 6 and 12–15. */
+  vec3 segment_force(const Substep &substep, size_t i, const vec3 &center,
+                     const vec3 &center_velocity, const vec3 &tip, const vec3 &tip_velocity,
+                     const vec3 &wind_wo, Counts &counts) const;
+  /* Ward & Lin 2003 §5.5: when the segment from `node` (chart `chart`, angles `angles`) ends
+   * at `tip` deeper than the tolerance inside a collider, it turns about `node` onto the
+   * surface and stops turning. Returns true when it moved. */
+  bool project_segment(const Substep &substep, const vec3 &node, vec3 tip, float d,
+                       const mat3 &chart, vec2 &angles, vec2 &omega) const;
 
   StrandParams params_;
+  WindParams wind_params_;
   WindField wind_;
   std::vector<int32_t> curve_offsets_;
   std::vector<vec3> rest_positions_wo_;
@@ -173,6 +209,12 @@ class StrandSolver {
   CollisionParams collision_params_;
   int64_t contacts_num_ = 0;
   int64_t projections_num_ = 0;
+  int64_t diverged_num_ = 0;
+
+  std::vector<SubstepPass *> passes_;
+  std::vector<vec3> positions_before_; /* the nodes before the passes of a substep */
+  std::vector<vec3> velocities_before_;
+  std::vector<double> pass_ms_;
 
   /* The head at the end of the last step, and its velocity over that step. */
   HeadPose rest_pose_;

@@ -1,4 +1,4 @@
-#include "strands/head_motion.hh"
+#include "core/head_motion.hh"
 
 #include <cmath>
 
@@ -34,6 +34,11 @@ vec3 HeadPose::transform_point(const vec3 &p_head) const
   return translation + rotation * (scale * p_head);
 }
 
+vec3 HeadPose::inverse_transform_point(const vec3 &p_wo) const
+{
+  return (glm::inverse(rotation) * (p_wo - translation)) / scale;
+}
+
 HeadVelocity HeadVelocity::between(const HeadPose &from, const HeadPose &to, const float dt)
 {
   HeadVelocity velocity;
@@ -50,6 +55,22 @@ HeadVelocity HeadVelocity::between(const HeadPose &from, const HeadPose &to, con
     velocity.angular = v * (angle / (sin_half * dt));
   }
   return velocity;
+}
+
+HeadAcceleration HeadAcceleration::between(const HeadVelocity &before, const HeadVelocity &after,
+                                           const float dt)
+{
+  HeadAcceleration head;
+  head.linear = (after.linear - before.linear) / dt;
+  head.angular_velocity = after.angular;
+  head.angular_acceleration = (after.angular - before.angular) / dt;
+  return head;
+}
+
+mat3 HeadAcceleration::transport_gradient() const
+{
+  const mat3 w = cross_matrix(angular_velocity);
+  return cross_matrix(angular_acceleration) + w * w;
 }
 
 }  // namespace hairdyn

@@ -1,0 +1,496 @@
+"""Owns: the LCP method (Bando 2003, loosely connected particles; native LcpSolver) and what
+only it needs: its add-on-only initialisation options (where the particles start, the scalp,
+the length map of §3.2), the scalp patch and length map readers, and ParticleSkin, which
+carries the real strands with the particles (§4). LCP reads the collision maps and the report
+tolerance; its response to the body is its own (body_friction), not the collision response
+settings.
+"""
+
+import bpy
+import numpy as np
+from bpy.props import EnumProperty, PointerProperty, StringProperty
+
+from .. import bridge
+from ..errors import HairdynError
+from .base import Method, Section, Stream, nearest
+
+
+class HairdynLcpInit(bpy.types.PropertyGroup):
+    """Where LCP's particles start (Bando 2003 §3.2): add-on-only options, read by the LCP
+    adapter when it builds the particles."""
+
+    particles_from: EnumProperty(
+        name="Particles From",
+        default='SCALP',
+        items=(
+            (
+                'SCALP',
+                "Scalp",
+                "Poisson-disc samples of the hair volume over the scalp's (u, v) and the arc "
+                "length s up to the length map, in a cantilever-beam shape (Bando 2003 §3.2)",
+            ),
+            (
+                'GROOM',
+                "Groom",
+                "Samples along the groom's strands: u, v from the root's surface position, s "
+                "from arc length, directions from the tangents (Bando 2003 §3.2); needs no "
+                "scalp",
+            ),
+        ),
+        description="Where LCP's particles start (Bando 2003 §3.2)",
+    )
+    scalp_source: EnumProperty(
+        name="Scalp From",
+        default='GROUP',
+        items=(
+            (
+                'GROUP',
+                "Vertex Group",
+                "The head's faces whose corners all lie in a vertex group (Bando 2003 §3.2)",
+            ),
+            ('FACES', "Selected Faces", "The head mesh's selected faces (Bando 2003 §3.2)"),
+        ),
+        description="How the part of the head that grows hair is marked (Bando 2003 §3.2)",
+    )
+    scalp_group: StringProperty(
+        name="Scalp",
+        default="scalp",
+        description="Vertex group of the head that marks the scalp LCP samples the hair volume "
+        "over (Bando 2003 §3.2)",
+    )
+    length_source: EnumProperty(
+        name="Lengths From",
+        default='GROOM',
+        items=(
+            (
+                'GROOM',
+                "Groom",
+                "At each scalp point the length of the groom's nearest strand; the longest "
+                "strand is L_max (Bando 2003 §3.2)",
+            ),
+            (
+                'IMAGE',
+                "Image",
+                "A grey image over the scalp's (u, v), scaled by Max Length L_max (Bando 2003 "
+                "§3.2)",
+            ),
+            (
+                'WEIGHTS',
+                "Vertex Weights",
+                "A vertex group of the head, its weights scaled by Max Length L_max (Bando "
+                "2003 §3.2)",
+            ),
+        ),
+        description="The length map L(u, v): how long the hair grows over the scalp (Bando "
+        "2003 §3.2)",
+    )
+    length_image: PointerProperty(
+        name="Length Image",
+        type=bpy.types.Image,
+        description="Grey image of the length map L(u, v) / L_max over the scalp's harmonic "
+        "(u, v) (Bando 2003 §3.2): columns from u = 0, rows from v = 0 at the "
+        "bottom; white grows hair of Max Length, black none",
+    )
+    length_group: StringProperty(
+        name="Length Group",
+        default="length",
+        description="Vertex group of the head whose weights are the length map L / L_max "
+        "(Bando 2003 §3.2): weight 1 grows hair of Max Length, 0 none",
+    )
+
+
+def draw_initialisation(layout, settings):
+    """Where the particles start (Bando 2003 §3.2): only the rows the choices use."""
+    init = settings.lcp_init
+    layout.prop(init, "particles_from")
+    if init.particles_from == 'GROOM':
+        return
+    obj = settings.id_data
+    head = settings.head or (obj.data.surface if obj.type == 'CURVES' else obj)
+    if head is not None and head.type != 'MESH':
+        head = None
+
+    def vertex_group(name):
+        if head is None:
+            layout.prop(init, name)
+        else:
+            layout.prop_search(init, name, head, "vertex_groups")
+
+    layout.prop(init, "scalp_source")
+    if init.scalp_source == 'GROUP':
+        vertex_group("scalp_group")
+    layout.prop(init, "length_source")
+    if init.length_source == 'IMAGE':
+        layout.prop(init, "length_image")
+    elif init.length_source == 'WEIGHTS':
+        vertex_group("length_group")
+
+
+def blend_weights(distances):
+    """Inverse-distance weights over each row, summing to 1."""
+    weights = 1.0 / np.maximum(distances, 1e-6)
+    return weights / weights.sum(axis=1, keepdims=True)
+
+
+def scalp_triangles(head, mesh, init):
+    """The head mesh's triangles the artist marked as scalp (Bando 2003 §3.2): those whose
+    corners all lie in the scalp vertex group, or those of the selected faces."""
+    if init.scalp_source == 'FACES':
+        selected = bridge.selected_faces(head)
+        faces_num = int(mesh.triangle_faces.max()) + 1 if len(mesh.triangle_faces) else 0
+        if faces_num != len(selected):
+            raise HairdynError(
+                f"The modifiers of '{head.name}' change its faces, so its face "
+                "selection does not mark the scalp: use a vertex group"
+            )
+        triangles = mesh.triangles[selected[mesh.triangle_faces]]
+        if len(triangles) == 0:
+            raise HairdynError(
+                f"No face of '{head.name}' is selected: select the scalp's faces "
+                "in Edit Mode (LCP samples the hair volume over them), or mark "
+                "the scalp with a vertex group"
+            )
+        return triangles
+    group_name = init.scalp_group
+    members = bridge.vertex_group_members(head, {group_name}, len(mesh.vertices)).get(group_name)
+    if members is None or len(members) == 0:
+        raise HairdynError(
+            f"'{head.name}' has no vertex group '{group_name}' marking the scalp: "
+            "LCP samples the hair volume over it (set Scalp in the LCP panel, or "
+            "take the scalp from the selected faces)"
+        )
+    inside = np.zeros(len(mesh.vertices), dtype=bool)
+    inside[members] = True
+    triangles = mesh.triangles[inside[mesh.triangles].all(axis=1)]
+    if len(triangles) == 0:
+        raise HairdynError(f"The scalp group '{group_name}' of '{head.name}' covers no face")
+    return triangles
+
+
+def scalp_patch(head, depsgraph, init):
+    """The scalp as a mesh of its own (Bando 2003 §3.2): world-space vertices and triangles of
+    the part of the head the artist marked, and each patch vertex's index in the head mesh."""
+    mesh = bridge.read_mesh(head, depsgraph)
+    triangles = scalp_triangles(head, mesh, init)
+    used = np.unique(triangles)
+    remap = np.full(len(mesh.vertices), -1, dtype=np.int32)
+    remap[used] = np.arange(len(used), dtype=np.int32)
+    return (
+        np.ascontiguousarray(mesh.vertices_wo()[used]),
+        np.ascontiguousarray(remap[triangles], dtype=np.int32),
+        used,
+    )
+
+
+def length_map(init, max_length, groom, head, scalp_vertices_wo, scalp_head_vertices):
+    """The length map L(u, v) of Bando 2003 §3.2 as the sampler takes it: (per scalp vertex
+    weights or None, a grey image (H, W) or None, L_max in m). From the groom (the longest
+    strand is L_max), or an image or the head's vertex weights scaled by Max Length."""
+    source = init.length_source
+    if source == 'GROOM':
+        weights, longest = length_weights(groom, scalp_vertices_wo)
+        return weights, None, longest
+    if source == 'IMAGE':
+        return None, length_image(init.length_image), max_length
+    return (group_length_weights(head, init.length_group, scalp_head_vertices), None, max_length)
+
+
+def length_image(image):
+    """The grey values of the length-map image, rows from v = 0; a HairdynError when it
+    would grow no hair."""
+    if image is None:
+        raise HairdynError(
+            "Empty length map: no Length Image is set (choose a grey image in "
+            "the LCP panel; white grows hair of Max Length, black none)"
+        )
+    grey = bridge.image_grey(image)
+    if grey.size == 0:
+        raise HairdynError(
+            f"Empty length map: the image '{image.name}' has no pixels (is its file missing?)"
+        )
+    if not (grey > 0.0).any():
+        raise HairdynError(
+            f"Empty length map: the image '{image.name}' is black everywhere, "
+            "so no hair would grow (white grows hair of Max Length)"
+        )
+    return grey
+
+
+def group_length_weights(head, group_name, scalp_head_vertices):
+    """Per scalp vertex, its weight in the head's vertex group `group_name`; a HairdynError
+    when the group is missing or zero over the whole scalp."""
+    weights = bridge.vertex_group_weights(
+        head, {group_name}, int(scalp_head_vertices.max()) + 1
+    ).get(group_name)
+    if weights is None:
+        raise HairdynError(
+            f"Empty length map: '{head.name}' has no vertex group '{group_name}' "
+            "(set Length Group in the LCP panel to the group whose weights are "
+            "the hair lengths)"
+        )
+    weights = weights[scalp_head_vertices]
+    if not (weights > 0.0).any():
+        raise HairdynError(
+            f"Empty length map: the weights of the group '{group_name}' are zero "
+            f"over the whole scalp of '{head.name}', so no hair would grow"
+        )
+    return np.ascontiguousarray(weights, dtype=np.float32)
+
+
+def segment_lengths(groom):
+    """Per point, the length of the segment that ends at it (0 at the roots), float64."""
+    lengths = np.zeros(len(groom.positions_wo))
+    lengths[1:] = np.linalg.norm(np.diff(groom.positions_wo.astype(np.float64), axis=0), axis=1)
+    lengths[groom.curve_offsets[:-1]] = 0.0  # no segment from one strand's tip to the next root
+    return lengths
+
+
+def length_weights(groom, scalp_vertices_wo):
+    """The length map of Bando 2003 §3.2 from a groom: per scalp vertex, the length of the
+    strand rooted nearest to it, over the longest strand; and that longest length (m)."""
+    lengths = np.add.reduceat(segment_lengths(groom), groom.curve_offsets[:-1])
+    closest = nearest(scalp_vertices_wo, groom.positions_wo[groom.curve_offsets[:-1]])[0][:, 0]
+    longest = float(lengths.max())
+    return np.ascontiguousarray(lengths[closest] / longest, dtype=np.float32), longest
+
+
+class ParticleSkin:
+    """LCP's motion on real strands (Bando 2003 §4): every strand point moves with the
+    particles near its (u, v, s), in the distance of eq. 3 (scalp points apart, and arc
+    length). A strand point's scalp point is its root and s its arc length; a particle's
+    scalp point is where its hair leaves the scalp: x − s t for the fixed root particles, and
+    for the others that of the root particles nearest in (u, v). In the head's frame, the
+    point is displaced by the inverse-distance blend of the displacements of the
+    `neighbours_num` nearest particles since rest, so the groom keeps its shape at rest and
+    takes the particles' motion, and the head's own motion is carried exactly. Roots follow the
+    head rigidly; then, root to tip, each point is put at its rest distance from the previous
+    one toward where it was carried, or where the body's surface is when that is inside a
+    collider, so strands never stretch nor go through the body."""
+
+    def __init__(self, groom, solver, head_matrix, neighbours_num=4):
+        offsets = groom.curve_offsets
+        counts = np.diff(offsets)
+        self.roots = offsets[:-1]
+        points = groom.positions_wo.astype(np.float64)
+        self.rest_lengths = segment_lengths(groom)
+        arc = np.cumsum(self.rest_lengths)
+        arc -= np.repeat(arc[self.roots], counts)
+        strand_points = np.column_stack([np.repeat(points[self.roots], counts, axis=0), arc])
+
+        x = np.asarray(solver.positions, dtype=np.float64)
+        t = np.asarray(solver.directions, dtype=np.float64)
+        s = np.asarray(solver.s, dtype=np.float64)
+        scalp = x - s[:, None] * t
+        root = s < 0.0
+        if root.any() and not root.all():
+            uv = np.column_stack([solver.u, solver.v]).astype(np.float64)
+            near, distances = nearest(uv[~root], uv[root], 3)
+            scalp[~root] = (blend_weights(distances)[:, :, None] * scalp[root][near]).sum(axis=1)
+        self.neighbours, distances = nearest(
+            strand_points, np.column_stack([scalp, s]), neighbours_num
+        )
+        self.weights = blend_weights(distances)
+        self.rest_head = bridge.to_local(head_matrix, points)
+        self.particles_rest_head = bridge.to_local(head_matrix, x)
+        # Point k of every strand long enough to have one.
+        self.layers = [self.roots[counts > k] + k for k in range(1, int(counts.max()))]
+
+    def apply(self, particles_wo, head_matrix, colliders=None):
+        """Strand positions (N, 3) float32 for the particles' current positions; `colliders`
+        (a native ColliderSet, or None) keeps the points out of the body."""
+        moved = bridge.to_local(head_matrix, np.asarray(particles_wo, dtype=np.float64))
+        moved -= self.particles_rest_head
+        targets = bridge.to_world(
+            head_matrix,
+            self.rest_head + (self.weights[:, :, None] * moved[self.neighbours]).sum(axis=1),
+        )
+        positions = np.empty_like(targets)
+        positions[self.roots] = bridge.to_world(head_matrix, self.rest_head[self.roots])
+
+        def toward(layer, target):
+            step = target - positions[layer - 1]
+            length = np.maximum(np.linalg.norm(step, axis=1, keepdims=True), 1e-12)
+            return positions[layer - 1] + step * (self.rest_lengths[layer, None] / length)
+
+        for layer in self.layers:  # root to tip, all strands at once
+            positions[layer] = toward(layer, targets[layer])
+            for _ in range(0 if colliders is None else 2):  # swung out where it went inside
+                contacts = colliders.find_contacts(positions[layer])
+                inside = contacts["hit"] & (contacts["depth"] > 0.0)
+                if not inside.any():
+                    break
+                surface = contacts["surface_point"][inside] + 1e-4 * contacts["normal"][inside]
+                positions[layer[inside]] = toward(layer[inside], surface)
+        return positions
+
+
+class Lcp(Method):
+    identifier = "LCP"
+    label = "LCP"
+    description = (
+        "Loosely connected particles (Bando 2003): particles sample the hair volume "
+        "over the scalp, loose springs keep its length, SPH interactions its "
+        "density; the strands follow the particles"
+    )
+    params = {"lcp": "LcpParams"}
+    options = {"lcp_init": HairdynLcpInit}
+    collision = ("maps", "report")
+    shows = ("use_billboards",)
+    sections = (
+        Section(
+            "Loosely Connected Particles",
+            "lcp",
+            (
+                "particle_spacing",
+                "particle_num",
+                "root_depth",
+                "beam_length",
+                "substeps",
+                "implicit_springs",
+                "h1",
+                "a0",
+                "neighbor_num",
+                "young_modulus",
+                "material_density",
+                "spring_damping",
+                "hair_density",
+            ),
+            draw=draw_initialisation,
+            open=True,
+        ),
+        Section(
+            "Hair-Hair Interactions",
+            "lcp",
+            (
+                "h2",
+                "attraction_repulsion",
+                "pressure_stiffness",
+                "rest_density",
+                "hair_collision",
+                "collision_damping",
+                "hair_friction",
+                "friction_damping",
+            ),
+            active={
+                "pressure_stiffness": lambda lcp: lcp.attraction_repulsion,
+                "rest_density": lambda lcp: lcp.attraction_repulsion,
+                "collision_damping": lambda lcp: lcp.hair_collision,
+                "friction_damping": lambda lcp: lcp.hair_friction,
+            },
+        ),
+        Section(
+            "Forces and Wind",
+            "lcp",
+            (
+                "air_friction",
+                "body_friction",
+                "wind_speed",
+                "wind_heading",
+                "wind_particle_spacing",
+                "wind_drag",
+                "air_density",
+            ),
+        ),
+        Section(
+            "Initial Shape",
+            "lcp",
+            (
+                "max_length",
+                "root_tangent_weight",
+                "root_normal_weight",
+                "whorl_u",
+                "whorl_v",
+                "seed",
+            ),
+            rest=True,
+        ),
+    )
+
+    def __init__(self, build):
+        self.solver = self._make_solver(build)
+        self.collider_set = build.collider_set
+        if self.collider_set is not None:  # moves rest particles out of the body: skin after
+            self.solver.set_colliders(self.collider_set)
+        self.skin = ParticleSkin(build.groom, self.solver, build.head_matrix)
+        self.strand_positions = self.skin.apply(
+            self.solver.positions, build.head_matrix, self.collider_set
+        )
+
+    @staticmethod
+    def _make_solver(build):
+        """Bando 2003 §3.2: particles sampled over the scalp of the head up to the length map,
+        or along the groom's strands."""
+        init, groom, native = build.settings.lcp_init, build.groom, build.native
+        params = build.params("lcp")
+        if init.particles_from == 'GROOM':
+            particles = native.lcp_particles_from_groom(
+                params, groom.curve_offsets, groom.positions_wo, groom.root_uvs
+            )
+        else:
+            scalp_vertices, scalp_triangles, scalp_head_vertices = scalp_patch(
+                build.head, build.depsgraph, init
+            )
+            weights, image, params.max_length = length_map(
+                init, params.max_length, groom, build.head, scalp_vertices, scalp_head_vertices
+            )
+            particles = native.sample_lcp_particles(
+                params, scalp_vertices, scalp_triangles, weights, image
+            )
+        return native.LcpSolver(
+            params,
+            particles["positions"],
+            particles["directions"],
+            particles["u"],
+            particles["v"],
+            particles["s"],
+            build.head_matrix,
+        )
+
+    def step(self, frame_dt, head_matrix):
+        self.solver.step(frame_dt, head_matrix)
+        self.strand_positions = self.skin.apply(
+            self.solver.positions, head_matrix, self.collider_set
+        )
+
+    @property
+    def positions(self):
+        return self.strand_positions
+
+    def particle_arrays(self):
+        """The particles and their attributes (Bando 2003 §4: direction t, density, u, v, s)."""
+        solver = self.solver
+        return {
+            "position": solver.positions,
+            "direction": solver.directions,
+            "velocity": solver.velocities,
+            "density": solver.density,
+            "u": solver.u,
+            "v": solver.v,
+            "s": solver.s,
+        }
+
+    def streams(self):
+        return {
+            "particles": Stream(
+                {
+                    "position": 3,
+                    "direction": 3,
+                    "velocity": 3,
+                    "density": 1,
+                    "u": 1,
+                    "v": 1,
+                    "s": 1,
+                },
+                self.particle_arrays,
+                self.solver.particles_num,
+                outputs=("output_points",),
+                billboards=True,
+            )
+        }
+
+    def report(self):
+        return {
+            "particles": self.solver.particles_num,
+            "pairs": self.solver.pairs_num,
+            "interpenetrating_pairs": self.solver.interpenetrating_pairs_num,
+        }

@@ -1,0 +1,159 @@
+"""Owns: the Strands method (Kurihara 1993 angular strand dynamics, Ward & Lin 2003 implicit
+hinges; native StrandSolver) with its child hairs (Kurihara 1993 §4), and the extensions that
+plug groom-wide substep passes (volume, hair-hair collision, ...) into it.
+
+An extension is an `Extension`: the settings group(s) it adds (a native parameter struct, whose
+PropertyGroup is generated, and/or add-on-only options), its panel sections, and
+`attach(solver, build)`, called once the solver is built, which adds its native pass.
+`register_extension()` must run before the add-on registers (import it from methods/__init__).
+"""
+
+import numpy as np
+
+from ..errors import HairdynError
+from .base import Method, Section, Stream, nearest
+
+
+class Extension:
+    """Something the strand solver runs each substep (native SubstepPass): params {settings
+    attribute: native struct name}, options {settings attribute: PropertyGroup class},
+    sections (Section ...), attach(solver, build) adds the pass to a built solver."""
+
+    def __init__(self, name, attach, params=None, options=None, sections=()):
+        self.name, self.attach = name, attach
+        self.params, self.options = dict(params or {}), dict(options or {})
+        self.sections = tuple(sections)
+
+
+def root_normals(groom, head_mesh):
+    """Per strand, the world normal of the head-mesh vertex nearest to its root."""
+    closest = nearest(groom.positions_wo[groom.curve_offsets[:-1]], head_mesh.vertices_wo())[0]
+    return np.ascontiguousarray(head_mesh.normals_wo()[closest[:, 0]], dtype=np.float32)
+
+
+def scalp_points(groom, head_mesh, count, seed):
+    """`count` random points on the part of the head the groom's roots cover: area-weighted
+    over the triangles whose corners all lie within twice the typical root spacing of a
+    root."""
+    roots = groom.positions_wo[groom.curve_offsets[:-1]].astype(np.float64)
+    if len(roots) > 1:
+        spacing = np.median(nearest(roots, roots, 2)[1].max(axis=1))  # itself, and the next
+    else:
+        spacing = np.linalg.norm(groom.positions_wo[1] - groom.positions_wo[0])
+    vertices = head_mesh.vertices_wo().astype(np.float64)
+    near = nearest(vertices, roots)[1][:, 0] <= 2.0 * spacing
+    triangles = head_mesh.triangles[near[head_mesh.triangles].all(axis=1)]
+    if len(triangles) == 0:
+        raise HairdynError(
+            "No part of the head lies under the hair roots: interpolated "
+            "children need the roots on the head's surface"
+        )
+    corners = vertices[triangles]
+    areas = 0.5 * np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
+    rng = np.random.default_rng(seed)
+    chosen = rng.choice(len(triangles), size=count, p=areas / areas.sum())
+    u, v = rng.random(count), rng.random(count)
+    flip = u + v > 1.0
+    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
+    a, b, c = corners[chosen, 0], corners[chosen, 1], corners[chosen, 2]
+    points = a + u[:, None] * (b - a) + v[:, None] * (c - a)
+    return np.ascontiguousarray(points, dtype=np.float32)
+
+
+class Strands(Method):
+    identifier = "STRANDS"
+    label = "Strands"
+    description = (
+        "Strand dynamics: chains of rigid segments with hinge springs (Kurihara "
+        "1993), implicit integration (Ward & Lin 2003)"
+    )
+    params = {"strands": "StrandParams", "wind": "WindParams"}
+    collision = ("maps", "response", "report")
+    sections = (
+        Section(
+            "Dynamics",
+            "strands",
+            ("integrator", "substeps", "k_theta", "k_phi", "damping", "line_density"),
+            open=True,
+        ),
+        Section("Wind", "wind", rest=True, draw=lambda layout, settings: layout.prop(
+            settings.strands, "air_drag")),
+        Section(
+            "Child Hairs",
+            "strands",
+            ("children_per_guide", "child_mode", "child_spread", "seed"),
+            active={"child_spread": lambda group: group.child_mode == 'CLUSTER'},
+        ),
+        Section("More Strand Settings", "strands", rest=True),  # fields added to StrandParams later
+    )
+    shows = ("output_children",)
+    extensions = []  # Extension, in the order their passes run
+
+    def __init__(self, build):
+        from .. import bridge
+
+        params = build.params("strands")
+        groom = build.groom
+        head_mesh = bridge.read_mesh(build.head, build.depsgraph)
+        self.solver = build.native.StrandSolver(
+            groom.curve_offsets,
+            groom.positions_wo,
+            build.head_matrix,
+            root_normals(groom, head_mesh),
+            params,
+            build.params("wind"),
+        )
+        self.children = self._make_children(build, params, head_mesh)
+        if build.colliders is not None:
+            self.solver.set_colliders(build.colliders.set, build.colliders.params)
+        for extension in self.extensions:
+            extension.attach(self.solver, build)
+
+    def _make_children(self, build, params, head_mesh):
+        """Kurihara 1993 §4: child hairs clustered around the guides, or spread over the
+        scalp between them; None when there are none."""
+        count, groom = params.children_per_guide, build.groom
+        if count == 0:
+            return None
+        if params.child_mode == 0:  # cluster
+            return build.native.ChildHairs.around_guides(
+                groom.curve_offsets, count, params.child_spread, params.seed
+            )
+        roots = scalp_points(groom, head_mesh, count * groom.curves_num, params.seed)
+        return build.native.ChildHairs.between_guides(
+            groom.curve_offsets, groom.positions_wo, self.solver.root_frames, roots
+        )
+
+    def step(self, frame_dt, head_matrix):
+        self.solver.step(frame_dt, head_matrix)
+        if self.children is not None:
+            self.children.update(self.solver.positions, self.solver.root_frames)
+
+    @property
+    def positions(self):
+        return self.solver.positions
+
+    def streams(self):
+        if self.children is None:
+            return {}
+        offsets = np.asarray(self.children.curve_offsets)
+        return {
+            "children": Stream(
+                {"position": 3},
+                lambda: {"position": self.children.positions},
+                int(offsets[-1]),
+                offsets=offsets,
+                outputs=("output_children",),
+            )
+        }
+
+
+def register_extension(extension):
+    """Adds a substep pass with its settings to the Strands method (before the add-on
+    registers: the settings groups and panels are made at registration)."""
+    Strands.extensions.append(extension)
+    Strands.params = {**Strands.params, **extension.params}
+    Strands.options = {**Strands.options, **extension.options}
+    Strands.sections = Strands.sections + extension.sections

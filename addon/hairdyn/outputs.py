@@ -1,0 +1,54 @@
+"""Owns: writing a frame's streams into the hair object's output objects (created when
+missing). A stream names the settings pointers that show it (Stream.outputs): curves slots get
+its positions, the point slot a mesh of loose vertices with every array as a point attribute.
+The strands ("frame") show in output_curves and output_points, unless another stream takes
+output_points (LCP's particles).
+"""
+
+import bpy
+
+from . import billboards, bridge
+
+STRANDS = "frame"  # the strands' stream: the cache's main table
+STRAND_OUTPUT = {"outputs": ["output_curves", "output_points"], "billboards": False}
+SLOTS = {
+    "output_curves": ("curves", "_hairdyn"),
+    "output_children": ("curves", "_hairdyn_children"),
+    "output_points": ("points", "_hairdyn_points"),
+}
+
+
+def write(hair_obj, frame):
+    """frame: {stream name: (arrays, curve offsets or None, output {"outputs": [slots],
+    "billboards": bool})}, the strands under STRANDS."""
+    settings = hair_obj.hairdyn
+    taken = {
+        slot
+        for name, (_, _, output) in frame.items()
+        if name != STRANDS
+        for slot in output["outputs"]
+    }
+    for name, (arrays, offsets, output) in frame.items():
+        for slot in output["outputs"]:
+            if name == STRANDS and slot in taken:
+                continue
+            kind, suffix = SLOTS[slot]
+            target_name = f"{hair_obj.name}{suffix}"
+            if kind == "curves":
+                target = bridge.ensure_curves_output(
+                    getattr(settings, slot), target_name, offsets, like=hair_obj
+                )
+                setattr(settings, slot, target)
+                bridge.write_curves(target, arrays["position"])
+                continue
+            target = bridge.ensure_points_output(
+                getattr(settings, slot), target_name, like=hair_obj
+            )
+            setattr(settings, slot, target)
+            bridge.write_points(
+                target,
+                arrays["position"],
+                {key: value for key, value in arrays.items() if key != "position"},
+            )
+            if output["billboards"] and settings.use_billboards:
+                billboards.ensure(target, bpy.context.scene.camera)

@@ -1,0 +1,460 @@
+#include "strands/strand_solver.hh"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/parallel.hh"
+#include "groom/frames.hh"
+#include "groom/groom.hh"
+#include "strands/deflection.hh"
+
+namespace hairdyn {
+
+namespace {
+
+constexpr int max_projection_attempts = 4;
+
+/* Where a segment of length d from `root` should point so that its tip, now at `tip` inside a
+ * collider, lies on the tangent plane at the contact point T instead: the point of that plane
+ * at distance d from the root nearest to the tip's swing. When the plane is out of reach,
+ * toward T itself. */
+vec3 swing_onto_plane(const vec3 &root, const vec3 &tip, const float d, const Contact &contact)
+{
+  const vec3 &n = contact.normal_wo;
+  const float height = glm::dot(root - contact.surface_point_wo, n);
+  if (std::abs(height) >= d) {
+    return contact.surface_point_wo;
+  }
+  const vec3 foot = root - height * n;
+  vec3 along = tip - foot;
+  along -= glm::dot(along, n) * n;
+  const float along_length = glm::length(along);
+  if (along_length < 1e-12f) {
+    return contact.surface_point_wo;
+  }
+  return foot + (std::sqrt(d * d - height * height) / along_length) * along;
+}
+
+mat4 pose_matrix(const HeadPose &pose)
+{
+  return glm::translate(mat4(1.0f), pose.translation) * glm::mat4_cast(pose.rotation) *
+         glm::scale(mat4(1.0f), pose.scale);
+}
+
+}  // namespace
+
+StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions_wo,
+                           const mat4 &head_to_world_rest, const Span<vec3> root_normals_wo,
+                           const StrandParams &params, const WindParams &wind)
+    : params_(params),
+      wind_params_(wind),
+      wind_(wind),
+      curve_offsets_(curve_offsets.begin(), curve_offsets.end()),
+      rest_positions_wo_(rest_positions_wo.begin(), rest_positions_wo.end()),
+      rest_pose_(HeadPose::from_matrix(head_to_world_rest))
+{
+  assert(find_groom_error(curve_offsets, rest_positions_wo).empty());
+  assert(root_normals_wo.is_empty() || root_normals_wo.size() == curves_num());
+  const int64_t curves = curves_num();
+  const size_t points = rest_positions_wo_.size();
+  root_positions_head_.resize(size_t(curves));
+  root_frames_head_.resize(size_t(curves));
+  root_frames_wo_.resize(size_t(curves));
+  rest_lengths_.assign(points, 0.0f);
+  rest_rotations_.assign(points, mat3(1.0f));
+  angles_.assign(points, vec2(0.0f));
+  angular_velocities_.assign(points, vec2(0.0f));
+  trig_.assign(points, vec4(0.0f, 1.0f, 0.0f, 1.0f));
+  hinge_steps_.assign(points, HingeStep<vec2>{vec2(0.0f), vec2(0.0f)});
+  positions_wo_.resize(points);
+  velocities_wo_.resize(points);
+
+  compute_root_frames(curve_offsets_, rest_positions_wo_, root_normals_wo, root_frames_wo_);
+  const mat3 world_to_head_rotation = glm::transpose(rest_pose_.rotation_matrix());
+  parallel_for(curves, 256, [&](const IndexRange range) {
+    for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
+      const IndexRange curve_range = curve_points(curve_offsets_, curve);
+      const vec3 root_wo = rest_positions_wo_[size_t(curve_range.start)];
+      root_positions_head_[size_t(curve)] = (world_to_head_rotation *
+                                             (root_wo - rest_pose_.translation)) /
+                                            rest_pose_.scale;
+      root_frames_head_[size_t(curve)] = world_to_head_rotation * root_frames_wo_[size_t(curve)];
+      /* Rest frames by twist-free transport from the root frame; R_i = F_{i-1}ᵀ F_i. */
+      mat3 frame = root_frames_wo_[size_t(curve)];
+      for (int64_t i = curve_range.start + 1; i < curve_range.one_after_last(); i++) {
+        const vec3 segment = rest_positions_wo_[size_t(i)] - rest_positions_wo_[size_t(i - 1)];
+        rest_lengths_[size_t(i)] = glm::length(segment);
+        const mat3 next = parallel_transport(frame, segment / rest_lengths_[size_t(i)]);
+        rest_rotations_[size_t(i)] = glm::transpose(frame) * next;
+        frame = next;
+      }
+    }
+  });
+  reset();
+}
+
+void StrandSolver::set_params(const StrandParams &params)
+{
+  params_ = params;
+}
+
+void StrandSolver::set_wind(const WindParams &wind)
+{
+  wind_params_ = wind;
+  wind_ = WindField(wind);
+}
+
+void StrandSolver::set_colliders(const ColliderSet *colliders, const CollisionParams &params)
+{
+  colliders_ = colliders;
+  collision_params_ = params;
+}
+
+void StrandSolver::add_pass(SubstepPass *pass)
+{
+  assert(pass != nullptr);
+  passes_.push_back(pass);
+  pass_ms_.push_back(0.0);
+}
+
+void StrandSolver::clear_passes()
+{
+  passes_.clear();
+  pass_ms_.clear();
+}
+
+double StrandSolver::pass_ms(const std::string &name) const
+{
+  double ms = 0.0;
+  for (size_t i = 0; i < passes_.size(); i++) {
+    ms += name == passes_[i]->name() ? pass_ms_[i] : 0.0;
+  }
+  return ms;
+}
+
+float StrandSolver::moment_of_inertia(const int64_t point) const
+{
+  /* Kurihara 1993, eq. 2 prints I = (1/3) c k⁴ d³. A uniform rod of line density c and length
+   * d turning about its end has I = c d³ / 3; the extra k⁴ (k = segments per strand) is not
+   * dimensionally an inertia and would make the motion depend on how finely a strand is cut,
+   * so we read it as a typesetting artefact and use the rod: I = c d³ / 3. It matches eq. 5,
+   * which applies the segment's load at its centre (lever arm d / 2). */
+  const float d = rest_lengths_[size_t(point)];
+  return params_.line_density * d * d * d / 3.0f;
+}
+
+ForceField::ForceField(const StrandParams &params, const float line_density,
+                       const HeadAcceleration &head, const HeadVelocity &head_velocity)
+{
+  /* Kurihara 1993, eq. 6: F = d (g + a) + d f, with the line density c made explicit: gravity
+   * and the head's fictitious force act on the segment's mass c d, the wind on its length.
+   * f = c_air (v_wind − v) is linear drag, so the same term carries the wind and damps motion
+   * through still air. The head's a_rel(r, v_rel) = a + A (r − c) + 2 ω × v_rel with
+   * A = [ω̇]× + [ω]×² and v_rel = v − v_head − ω × (r − c) (core/head_motion.hh), so per length
+   *   F/d = c g − c a + c A c − c A r − 2c [ω]× (v − v_head + [ω]× c − [ω]× r) + c_air (v_wind − v).
+   */
+  const float c = line_density;
+  const mat3 a = head.transport_gradient();
+  const mat3 w = cross_matrix(head.angular_velocity);
+  const mat3 coriolis = 2.0f * c * w;
+  base = c * (params.gravity - head.linear + a * head.center) +
+         coriolis * (head_velocity.linear - w * head.center);
+  position_gradient = -c * a + coriolis * w;
+  velocity_gradient = -coriolis - mat3(params.air_drag);
+  air_drag = params.air_drag;
+}
+
+void StrandSolver::prepare_strand(const int64_t curve, const float h)
+{
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  const vec2 k(params_.k_theta, params_.k_phi);
+  for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+    hinge_steps_[size_t(i)] = hinge_step(params_.integrator, moment_of_inertia(i), k,
+                                         params_.damping, h);
+    /* Each segment's deflection at the end of a substep is its deflection at the start of the
+     * next: its sines and cosines are computed once per substep, not twice. */
+    trig_[size_t(i)] = Deflection(angles_[size_t(i)]).trig();
+  }
+}
+
+vec3 StrandSolver::segment_force(const Substep &substep, const size_t i, const vec3 &center,
+                                 const vec3 &center_velocity, const vec3 &tip,
+                                 const vec3 &tip_velocity, const vec3 &wind_wo,
+                                 Counts &counts) const
+{
+  const float d = rest_lengths_[i];
+  /* The force on this segment, lumped on its tip node (Kurihara 1993, eq. 6). This is the one
+   * place where a node's force is assembled: a collision response (eq. 12–15) filters it
+   * here, from the node's position and velocity, before it becomes a torque. */
+  vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo);
+  Contact contact;
+  if (colliders_ != nullptr && colliders_->find_contact(tip, contact)) {
+    /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
+    const float mass = params_.line_density * d;
+    force = mass * reaction_constraint_force(force / mass, tip_velocity, contact,
+                                             substep.reaction);
+    counts.contacts++;
+  }
+  return force;
+}
+
+bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec3 tip,
+                                   const float d, const mat3 &chart, vec2 &angles,
+                                   vec2 &omega) const
+{
+  if (colliders_ == nullptr) {
+    return false;
+  }
+  /* Ward & Lin 2003 §5.5: no node ends a step inside a body. The segment turns about its root
+   * until its tip lies on the surface's tangent plane at T, and stops turning (an inelastic
+   * contact). On a curved surface one turn can leave the tip a little inside; a few more
+   * settle it. */
+  bool moved = false;
+  Contact contact;
+  for (int attempt = 0; attempt < max_projection_attempts; attempt++) {
+    if (!colliders_->find_contact(tip, contact) ||
+        contact.depth <= substep.projection_tolerance_wo) {
+      break;
+    }
+    angles = chart_angles(chart, glm::normalize(swing_onto_plane(node, tip, d, contact) - node));
+    omega = vec2(0.0f);
+    tip = node + d * Deflection(angles).rotate(chart)[2];
+    moved = true;
+  }
+  return moved;
+}
+
+bool StrandSolver::advance_strand(const int64_t curve, const Substep &substep, Counts &counts)
+{
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  const size_t root = size_t(points.start);
+  /* The root frame and root are carried rigidly by the head. */
+  const mat3 frame = substep.rotation * root_frames_head_[size_t(curve)];
+  const vec3 node = substep.pose.transform_point(root_positions_head_[size_t(curve)]);
+  const vec3 node_velocity = (node - positions_wo_[root]) / substep.h;
+  positions_wo_[root] = node;
+  velocities_wo_[root] = node_velocity;
+  root_frames_wo_[size_t(curve)] = frame;
+  const vec3 wind_wo = wind_.velocity_at(node, substep.time);
+  const bool finite = advance_kurihara(points, substep, frame, node_velocity, wind_wo, counts);
+  if (!finite) {
+    counts.diverged++;
+    place_at_rest(curve, substep.pose);
+  }
+  return finite;
+}
+
+void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
+{
+  /* What the passes changed (positions_before_, velocities_before_ hold the nodes as the
+   * strands left them) comes back root to tip: a moved node turns its segment toward it about
+   * the segment's (possibly moved) root, the same swing as the collision projection, and a
+   * change of velocity relative to the parent node changes the hinge's rates,
+   * Δ(v − v_node) = d (Δθ̇ e_θ + Δφ̇ cos θ e_φ). A strand the passes left alone keeps its bits. */
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  const size_t root = size_t(points.start);
+  mat3 frame = substep.rotation * root_frames_head_[size_t(curve)];
+  vec3 node = positions_before_[root]; /* Roots are kinematic whatever a pass did. */
+  positions_wo_[root] = node;
+  velocities_wo_[root] = velocities_before_[root];
+  bool moved = false;
+  vec3 parent_delta_v(0.0f);
+  for (size_t i = root + 1; i < size_t(points.one_after_last()); i++) {
+    const float d = rest_lengths_[i];
+    const mat3 chart = frame * rest_rotations_[i];
+    moved = moved || positions_wo_[i] != positions_before_[i];
+    if (moved) {
+      const vec3 along = positions_wo_[i] - node;
+      const float length = glm::length(along);
+      if (length > 1e-6f * d) {
+        angles_[i] = chart_angles(chart, along / length);
+      }
+      trig_[i] = Deflection(angles_[i]).trig();
+    }
+    const Deflection deflection(trig_[i]);
+    frame = deflection.rotate(chart);
+    const vec3 delta_v = velocities_wo_[i] - velocities_before_[i];
+    if (delta_v != parent_delta_v) {
+      const vec3 own = (delta_v - parent_delta_v) / d;
+      vec2 &omega = angular_velocities_[i];
+      omega.x += glm::dot(own, frame[0]);
+      if (deflection.cos_theta > 1e-3f) {
+        omega.y += glm::dot(own, frame[1]) / deflection.cos_theta;
+      }
+    }
+    parent_delta_v = delta_v;
+    if (moved) {
+      positions_wo_[i] = node + d * frame[2];
+    }
+    node = positions_wo_[i];
+  }
+}
+
+void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
+{
+  assert(frame_dt > 0.0f);
+  const HeadPose pose = HeadPose::from_matrix(head_to_world);
+
+  /* The head's velocity over this frame and its change since the last one; within the frame
+   * the head moves along the interpolated path with these rates. */
+  const HeadVelocity velocity = HeadVelocity::between(pose_, pose, frame_dt);
+  HeadAcceleration head = HeadAcceleration::between(head_velocity_, velocity, frame_dt);
+
+  const int substeps_num = std::max(params_.substeps, 1);
+  std::vector<Substep> substeps(static_cast<size_t>(substeps_num));
+  for (int s = 0; s < substeps_num; s++) {
+    const float t = float(s + 1) / float(substeps_num);
+    Substep &substep = substeps[size_t(s)];
+    substep.h = frame_dt / float(substeps_num);
+    substep.time = time_ + t * frame_dt;
+    substep.pose = HeadPose::interpolate(pose_, pose, t);
+    substep.rotation = substep.pose.rotation_matrix();
+    substep.head_velocity = velocity;
+    head.center = substep.pose.translation;
+    substep.forces = ForceField(params_, params_.line_density, head, velocity);
+    if (colliders_ != nullptr) {
+      substep.reaction = ReactionConstants::from(collision_params_, substep.h);
+      substep.projection_tolerance_wo = collision_params_.projection_tolerance *
+                                        colliders_->size_wo();
+    }
+  }
+
+  /* Counts per chunk of strands, summed in order: deterministic for any thread count. */
+  const int64_t grain = 32;
+  std::vector<Counts> counts(size_t((curves_num() + grain - 1) / grain));
+  const auto for_each_curve = [&](auto &&fn) {
+    parallel_for(curves_num(), grain, [&](const IndexRange range) {
+      Counts &chunk = counts[size_t(range.start / grain)];
+      for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
+        fn(curve, chunk);
+      }
+    });
+  };
+  std::fill(pass_ms_.begin(), pass_ms_.end(), 0.0);
+  if (passes_.empty()) {
+    /* Strands are independent between passes: each runs all its substeps in a row (the same
+     * result as substep by substep, with its data hot in cache). */
+    for_each_curve([&](const int64_t curve, Counts &chunk) {
+      prepare_strand(curve, substeps[0].h);
+      for (const Substep &substep : substeps) {
+        if (!advance_strand(curve, substep, chunk)) {
+          break;
+        }
+      }
+    });
+  }
+  else {
+    for_each_curve([&](const int64_t curve, Counts &) { prepare_strand(curve, substeps[0].h); });
+    std::vector<uint8_t> diverged(size_t(curves_num()), 0);
+    for (const Substep &substep : substeps) {
+      for_each_curve([&](const int64_t curve, Counts &chunk) {
+        if (!diverged[size_t(curve)] && !advance_strand(curve, substep, chunk)) {
+          diverged[size_t(curve)] = 1;
+        }
+      });
+      positions_before_ = positions_wo_;
+      velocities_before_ = velocities_wo_;
+      SubstepState state;
+      state.h = substep.h;
+      state.time = substep.time;
+      state.curve_offsets = curve_offsets_;
+      state.positions_wo = positions_wo_;
+      state.velocities_wo = velocities_wo_;
+      state.head_to_world = pose_matrix(substep.pose);
+      for (size_t p = 0; p < passes_.size(); p++) {
+        const auto start = std::chrono::steady_clock::now();
+        passes_[p]->apply(state);
+        pass_ms_[p] += std::chrono::duration<double, std::milli>(
+                           std::chrono::steady_clock::now() - start)
+                           .count();
+      }
+      for_each_curve([&](const int64_t curve, Counts &chunk) {
+        if (!diverged[size_t(curve)]) {
+          take_back_strand(curve, substep);
+          if (!strand_is_sane(curve)) {
+            chunk.diverged++;
+            diverged[size_t(curve)] = 1;
+            place_at_rest(curve, substep.pose);
+          }
+        }
+      });
+    }
+  }
+  contacts_num_ = projections_num_ = diverged_num_ = 0;
+  for (const Counts &chunk : counts) {
+    contacts_num_ += chunk.contacts;
+    projections_num_ += chunk.projections;
+    diverged_num_ += chunk.diverged;
+  }
+
+  pose_ = pose;
+  head_velocity_ = velocity;
+  time_ += frame_dt;
+}
+
+bool StrandSolver::strand_is_sane(const int64_t curve) const
+{
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  for (int64_t i = points.start; i < points.one_after_last(); i++) {
+    const vec3 v = velocities_wo_[size_t(i)];
+    if (!(glm::dot(v, v) < runaway_speed * runaway_speed) || !is_finite(positions_wo_[size_t(i)]))
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+void StrandSolver::place_at_rest(const int64_t curve, const HeadPose &pose)
+{
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  mat3 frame = pose.rotation_matrix() * root_frames_head_[size_t(curve)];
+  root_frames_wo_[size_t(curve)] = frame;
+  vec3 node = pose.transform_point(root_positions_head_[size_t(curve)]);
+  positions_wo_[size_t(points.start)] = node;
+  velocities_wo_[size_t(points.start)] = vec3(0.0f);
+  for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+    frame = frame * rest_rotations_[size_t(i)];
+    node += rest_lengths_[size_t(i)] * frame[2];
+    positions_wo_[size_t(i)] = node;
+    velocities_wo_[size_t(i)] = vec3(0.0f);
+    angles_[size_t(i)] = vec2(0.0f);
+    angular_velocities_[size_t(i)] = vec2(0.0f);
+    trig_[size_t(i)] = vec4(0.0f, 1.0f, 0.0f, 1.0f);
+  }
+}
+
+void StrandSolver::reset_dynamics(const HeadPose &pose)
+{
+  pose_ = pose;
+  head_velocity_ = HeadVelocity();
+  time_ = 0.0f;
+  diverged_num_ = 0;
+  std::fill(angles_.begin(), angles_.end(), vec2(0.0f));
+  std::fill(angular_velocities_.begin(), angular_velocities_.end(), vec2(0.0f));
+  std::fill(velocities_wo_.begin(), velocities_wo_.end(), vec3(0.0f));
+  const mat3 rotation = pose.rotation_matrix();
+  for (size_t curve = 0; curve < root_frames_wo_.size(); curve++) {
+    root_frames_wo_[curve] = rotation * root_frames_head_[curve];
+  }
+}
+
+void StrandSolver::reset()
+{
+  reset_dynamics(rest_pose_);
+  /* The exact rest shape, not its reconstruction: an unmoved head returns it bit for bit. */
+  positions_wo_ = rest_positions_wo_;
+}
+
+void StrandSolver::reset(const mat4 &head_to_world)
+{
+  reset_dynamics(HeadPose::from_matrix(head_to_world));
+  parallel_for(curves_num(), 256, [&](const IndexRange range) {
+    for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
+      place_at_rest(curve, pose_);
+    }
+  });
+}
+
+}  // namespace hairdyn
