@@ -74,7 +74,7 @@ def test_two_by_two_wedge_one_bad_set_fails_alone_and_rerun_finishes_it(tmp_path
     python = _driver_python()
     table = tmp_path / "sets.csv"
     # a 2 x 2 of substeps x damping; substeps 0 is out of range (at least 1)
-    table.write_text("strands.substeps,strands.damping\n2,0.5\n2,2\n0,0.5\n4,2\n")
+    table.write_text("strands.substeps,strands.damping\n2,0.2\n2,0.8\n0,0.2\n4,0.8\n")
     out = tmp_path / "wedge"
     process, summary = _wedge(python, out, table)
     assert summary is not None, process.stdout[-3000:] + process.stderr[-3000:]
@@ -95,7 +95,7 @@ def test_two_by_two_wedge_one_bad_set_fails_alone_and_rerun_finishes_it(tmp_path
     done_before = {e["name"]: Path(e["report"]["cache"]).stat().st_mtime_ns
                    for e in summary["sets"] if e["status"] == "done"}
 
-    table.write_text("strands.substeps,strands.damping\n2,0.5\n2,2\n1,0.5\n4,2\n")  # fixed
+    table.write_text("strands.substeps,strands.damping\n2,0.2\n2,0.8\n1,0.2\n4,0.8\n")  # fixed
     process, summary = _wedge(python, out, table)
     assert process.returncode == 0, process.stdout[-3000:] + process.stderr[-3000:]
     assert [e["status"] for e in summary["sets"]] == ["done"] * 4

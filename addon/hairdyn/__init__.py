@@ -44,6 +44,7 @@ _MODULES = (
     "io_import",
     "presets",
     "ui",
+    "wedge",  # not imported here: cli.py loads it on its own (its driver needs no bpy)
 )
 
 if "bpy" in locals():
