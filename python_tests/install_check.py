@@ -25,4 +25,5 @@ Path(out_path).write_text(json.dumps({
     "registered": hasattr(bpy.types.Object, "hairdyn") and hasattr(bpy.ops.hairdyn, "bake"),
     "native": list(module.native.status()),
     "file": module.__file__,
+    "native_file": module.native.load().__file__ if module.native.status()[0] else None,
 }))

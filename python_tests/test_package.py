@@ -1,21 +1,43 @@
 """The add-on zip (3.4+) and the extension package (4.2+) install into a clean user folder and
-enable, carrying a native module that loads."""
+enable, carrying the native module of every CPython built (3.11, and 3.13 where the machine has
+one) and loading the one that matches the host."""
 import importlib.util
 import json
 import os
 import subprocess
 import sys
+import sysconfig
+import zipfile
+from pathlib import Path
 
 import bpy
 
 from conftest import ROOT, host_name
 
 
-def build_packages(out_dir):
+def package_module():
     spec = importlib.util.spec_from_file_location("hairdyn_package", ROOT / "scripts" / "package.py")
     package = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(package)
-    return package.build(out_dir)
+    return package
+
+
+def build_packages(out_dir):
+    return package_module().build(out_dir)
+
+
+def test_packages_carry_every_native_module(tmp_path):
+    """Both packages hold one module per CPython built; the build made the 3.13 one wherever
+    setup.sh found a Python 3.13 (its venv, .venv313, exists)."""
+    natives = package_module().native_modules()
+    expected = {"cpython-311"} | ({"cpython-313"} if (ROOT / ".venv313").is_dir() else set())
+    assert expected <= set(natives), natives
+    here = f"cpython-{sys.version_info.major}{sys.version_info.minor}"
+    assert natives[here].name == "_native" + sysconfig.get_config_var("EXT_SUFFIX")
+    for built, prefix in zip(build_packages(tmp_path), ("hairdyn/", "")):
+        with zipfile.ZipFile(built) as archive:
+            names = set(archive.namelist())
+        assert {prefix + path.name for path in natives.values()} <= names, (built, names)
 
 
 def test_package_installs_into_a_clean_user_folder(tmp_path):
@@ -40,3 +62,6 @@ def test_package_installs_into_a_clean_user_folder(tmp_path):
     assert result["registered"]
     assert result["native"][0], result["native"]
     assert result["file"].startswith(str(installed_under))
+    # the installed copy of the module built for this host's Python
+    assert result["native_file"] == str(Path(result["file"]).parent / (
+        "_native" + sysconfig.get_config_var("EXT_SUFFIX")))

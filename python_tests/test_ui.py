@@ -1,6 +1,7 @@
 """A real Blender window under Xvfb: the panel is drawn, its operators run from the UI
 (simulate, and the modal bake with its progress), screenshots are kept as artifacts."""
 import json
+import os
 import shutil
 import subprocess
 
@@ -24,7 +25,10 @@ def test_panel_in_a_real_window(fixture, obj, artifacts, tmp_path):
     command = [xvfb_run, "-a", "-s", "-screen 0 1280x800x24", blender, "--factory-startup",
                str(FIXTURES / fixture), "--python", str(UI_CHECK), "--", obj, str(out_json),
                str(screenshot), str(tmp_path / "cache")]
-    process = subprocess.run(command, capture_output=True, text=True, timeout=180)
+    # Python's copy of the environment: bpy 5.2 sets OCIO to its own colour config (a format
+    # Debian's Blender cannot read) in the process's C environment, which children inherit.
+    process = subprocess.run(command, capture_output=True, text=True, timeout=180,
+                             env=dict(os.environ))
     assert out_json.is_file(), process.stdout[-3000:] + process.stderr[-3000:]
     result = json.loads(out_json.read_text())
     assert result["error"] is None, result

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every hairdyn test: C++ (ctest), then pytest inside Debian's blender 3.4 binary, then pytest
-# with the bpy module of the venv (the newest Blender that installs here). Every suite runs;
-# the script fails if any failed.
+# with the bpy module of the venv (bpy 5.0, Python 3.11), then with bpy 5.2 on Python 3.13
+# (.venv313, where setup.sh found a Python 3.13). Every suite runs; the script fails if any
+# failed.
 set -uo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$ROOT"
@@ -28,6 +29,13 @@ suite "Python in the blender binary ($(blender --version 2>/dev/null | head -n 1
   blender -b --factory-startup --python-exit-code 1 --python python_tests/run_in_blender.py -- -q -rs
 suite "Python with the bpy module (bpy $(.venv/bin/python -c 'import importlib.metadata as m; print(m.version("bpy"))'))" \
   .venv/bin/python -m pytest python_tests -q -rs -p no:cacheprovider
+if [ -x .venv313/bin/python ]; then
+  suite "Python with the bpy module on Python 3.13 (bpy $(.venv313/bin/python -c 'import importlib.metadata as m; print(m.version("bpy"))'))" \
+    .venv313/bin/python -m pytest python_tests -q -rs -p no:cacheprovider
+else
+  echo "=== Python with the bpy module on Python 3.13: skipped: no .venv313 (setup.sh makes it" \
+       "only where a CPython 3.13 exists; this machine has none on PATH or under ~/.pyenv)"
+fi
 
 if ((failed)); then
   echo "failed suites: ${failures[*]}"

@@ -37,11 +37,14 @@ _MODULES = (
     "outputs",
     "simulation",
     "bake",
+    "frame_record",
+    "export",
     "playback",
     "operators",
     "io_import",
     "presets",
     "ui",
+    "wedge",  # not imported here: cli.py loads it on its own (its driver needs no bpy)
 )
 
 if "bpy" in locals():
@@ -57,6 +60,8 @@ import bpy  # noqa: E402
 
 from . import (  # noqa: E402, F401 - every module, for the reload above
     bake,
+    export,
+    frame_record,
     billboards,
     bridge,
     cache,
@@ -80,6 +85,8 @@ classes = (
     operators.HAIRDYN_OT_simulate,
     operators.HAIRDYN_OT_bake,
     operators.HAIRDYN_OT_free_bake,
+    export.HAIRDYN_OT_export_bake,
+    frame_record.HAIRDYN_OT_open_frame_record,
     io_import.HAIRDYN_OT_import_tfx,
     io_import.HAIRDYN_OT_import_cem_hair,
     operators.HAIRDYN_OT_collider_add,

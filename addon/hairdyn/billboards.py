@@ -177,6 +177,25 @@ def build_material():
     return material
 
 
+def _modifier_inputs(modifier):
+    """Blender 5.2+ shows a Geometry Nodes modifier's inputs as RNA structs
+    (modifier.properties.inputs.<identifier>.value); earlier ones as ID properties."""
+    return getattr(getattr(modifier, "properties", None), "inputs", None)
+
+
+def set_input(modifier, identifier, value):
+    inputs = _modifier_inputs(modifier)
+    if inputs is None:
+        modifier[identifier] = value
+    else:
+        getattr(inputs, identifier).value = value
+
+
+def get_input(modifier, identifier):
+    inputs = _modifier_inputs(modifier)
+    return modifier.get(identifier) if inputs is None else getattr(inputs, identifier).value
+
+
 def ensure(points_obj, camera, card_width=0.02, card_aspect=3.0, opacity=0.5):
     """The billboard modifier on the particle output object (node group and material made
     once per file). `camera` orients the cards; None leaves them facing +Y."""
@@ -187,12 +206,12 @@ def ensure(points_obj, camera, card_width=0.02, card_aspect=3.0, opacity=0.5):
         modifier = points_obj.modifiers.new(MODIFIER_NAME, 'NODES')
         modifier.node_group = tree
         ids = input_identifiers(tree)
-        modifier[ids["Card Width"]] = card_width
-        modifier[ids["Card Aspect"]] = card_aspect
-        modifier[ids["Opacity"]] = opacity
+        set_input(modifier, ids["Card Width"], card_width)
+        set_input(modifier, ids["Card Aspect"], card_aspect)
+        set_input(modifier, ids["Opacity"], opacity)
     camera_id = input_identifiers(tree)["Camera"]
-    if camera is not None and modifier.get(camera_id) != camera:
-        modifier[camera_id] = camera
+    if camera is not None and get_input(modifier, camera_id) != camera:
+        set_input(modifier, camera_id, camera)
     if material.name not in points_obj.data.materials:
         points_obj.data.materials.append(material)
     return modifier

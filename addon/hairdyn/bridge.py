@@ -383,14 +383,19 @@ def write_points(obj, positions_wo, attributes=None):
         mesh.clear_geometry()
         mesh.vertices.add(count)
     mesh.vertices.foreach_set("co", np.ascontiguousarray(positions_wo, dtype=np.float32).ravel())
-    for name, values in (attributes or {}).items():
+    write_point_attributes(mesh, attributes or {})
+    mesh.update()
+
+
+def write_point_attributes(data, attributes):
+    """Named (N,) or (N, 3) float32 arrays as point attributes of a Mesh or Curves."""
+    for name, values in attributes.items():
         values = np.ascontiguousarray(values, dtype=np.float32)
         width = 1 if values.ndim == 1 else values.shape[1]
         data_type, field = _ATTRIBUTE_TYPES[width]
-        attribute = mesh.attributes.get(name)
+        attribute = data.attributes.get(name)
         if attribute is None or attribute.data_type != data_type or attribute.domain != 'POINT':
             if attribute is not None:
-                mesh.attributes.remove(attribute)
-            attribute = mesh.attributes.new(name, data_type, 'POINT')
+                data.attributes.remove(attribute)
+            attribute = data.attributes.new(name, data_type, 'POINT')
         attribute.data.foreach_set(field, values.ravel())
-    mesh.update()

@@ -5,7 +5,8 @@ In Blender:        blender -b scene.blend --python addon/hairdyn/cli.py -- run -
 With the bpy module: python addon/hairdyn/cli.py --blend scene.blend run --object Hair ...
 
 `run` simulates into the output objects; `bake` also writes every frame to the cache
-(--cache FOLDER, --resume to continue a bake that stopped).
+(--cache FOLDER, --resume to continue a bake that stopped); `wedge` bakes a table of parameter
+sets in parallel on Dask (wedge.py); `export` writes a bake to Alembic or USD (export.py).
 
 `--set name=value` sets any property of the object's hairdyn settings by name (enum values
 case-insensitive; vectors as x,y,z; objects and images by name; colliders as a
@@ -47,7 +48,28 @@ def _arguments(argv):
                                       "subfolder named after the object is used)")
     bake.add_argument("--resume", action="store_true",
                       help="continue after the last baked frame instead of starting over")
+    export = commands.add_parser("export", help="write the baked frames of the output hair to "
+                                                "Alembic (.abc) or USD (.usd/.usda/.usdc)")
+    export.add_argument("--object", required=True, help="name of the hair object")
+    export.add_argument("--file", required=True, help="the file to write; its suffix picks the format")
+    export.add_argument("--cache", help="the cache folder given to bake (default: the object's)")
+    export.set_defaults(set=[], frames=None)
+    _wedge().add_arguments(commands.add_parser(
+        "wedge", help="bake a table of parameter sets in parallel on Dask (see wedge.py)"))
     return parser.parse_args(argv)
+
+
+def _wedge():
+    """wedge.py, loaded without the hairdyn package (whose import needs bpy): the wedge's
+    driver runs in any Python with Dask."""
+    import importlib.util
+
+    if "hairdyn_wedge" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("hairdyn_wedge",
+                                                      Path(__file__).with_name("wedge.py"))
+        sys.modules["hairdyn_wedge"] = module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    return sys.modules["hairdyn_wedge"]
 
 
 def _parse_value(prop, text):
@@ -198,11 +220,30 @@ def _bake(args, obj, start, end):
     return report
 
 
+def _export(args, obj):
+    """cli.py export: the bake in --cache (or the object's) to --file."""
+    import bpy
+    from hairdyn import export
+    from hairdyn.errors import HairdynError
+
+    if args.cache:
+        obj.hairdyn.cache_directory = str(Path(args.cache).resolve())
+    try:
+        result = export.export_bake(bpy.context, obj, args.file)
+    except HairdynError as error:
+        print(f"hairdyn: error: {error}", file=sys.stderr)
+        return RUN_ERROR
+    print(json.dumps(result, indent=2))
+    return 0
+
+
 def main(argv):
     try:
         args = _arguments(argv)
     except SystemExit as exit_:
         return USAGE_ERROR if exit_.code else 0
+    if args.command == "wedge":
+        return _wedge().main(args)
     import bpy
 
     hairdyn = _ensure_addon()
@@ -224,6 +265,8 @@ def main(argv):
         print(f"hairdyn: error: {error}", file=sys.stderr)
         return USAGE_ERROR
 
+    if args.command == "export":
+        return _export(args, obj)
     try:
         report = _bake(args, obj, start, end) if args.command == "bake" else \
             simulation.run(bpy.context, obj, start, end, on_frame=_progress)

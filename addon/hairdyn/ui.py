@@ -85,6 +85,8 @@ class HAIRDYN_PT_main(_HairdynPanel, bpy.types.Panel):
         row = layout.row()
         row.enabled = ok
         row.operator("hairdyn.simulate", icon='PLAY')
+        row.operator("hairdyn.export_bake", icon='EXPORT')  # greyed out where no exporter exists
+        row.operator("hairdyn.open_frame_record", icon='GRAPH', text="")
 
 
 def section_fields(method, section, group):
