@@ -288,32 +288,3 @@ def test_lcp_particles_from_the_groom(open_fixture):
     report = runner.report()
     assert report["nan_frames"] == 0 and report["particles"] == len(positions)
     assert np.isfinite(runner.simulation.positions).all()
-
-
-def test_strands_move_with_the_particles_near_their_u_v_s():
-    """ParticleSkin binds a strand point to particles by (u, v, s) (eq. 3's distance), not by
-    where they are: strand B's particles sit right on strand A's points, yet moving them moves
-    B, never A; rest gives the groom back."""
-    from types import SimpleNamespace
-
-    down = np.array([0.0, 0.0, -1.0], np.float32)
-    roots = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], np.float32)
-    groom = SimpleNamespace(curve_offsets=np.array([0, 3, 6], np.int32), positions_wo=np.concatenate(
-        [root + np.outer([0.0, 0.1, 0.2], down) for root in roots]).astype(np.float32))
-    s = np.array([-0.01, 0.1, 0.2] * 2, np.float32)
-    u = np.array([0.0] * 3 + [1.0] * 3, np.float32)
-    positions = np.concatenate([roots[0] + np.outer(s[:3], down),  # A's particles on A
-                                roots[0] + np.outer(s[3:], down) + 0.001])  # B's on A too
-    solver = SimpleNamespace(positions=positions.astype(np.float32), s=s, u=u,
-                             v=np.zeros(6, np.float32), directions=np.tile(down, (6, 1)))
-    solver.positions[3] = roots[1] - 0.01 * down  # B's root particle under B's root
-    head = np.eye(4)
-    skin = lcp.ParticleSkin(groom, solver, head, neighbours_num=2)
-    assert np.allclose(skin.apply(solver.positions, head), groom.positions_wo, atol=1e-6)
-    moved = solver.positions.copy()
-    moved[4:] += [0.0, 0.05, 0.0]  # B's free particles
-    strands = skin.apply(moved, head)
-    assert np.allclose(strands[:3], groom.positions_wo[:3], atol=1e-6)  # A stays
-    assert strands[5, 1] > 0.03  # B's tip moved with its particles
-    segments = np.linalg.norm(np.diff(strands[3:], axis=0), axis=1)
-    assert np.allclose(segments, 0.1, atol=1e-5)  # and kept its length

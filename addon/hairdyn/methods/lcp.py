@@ -1,7 +1,7 @@
 """Owns: the LCP method (Bando 2003, loosely connected particles; native LcpSolver) and what
 only it needs: its add-on-only initialisation options (where the particles start, the scalp,
-the length map of §3.2), the scalp patch and length map readers, and ParticleSkin, which
-carries the real strands with the particles (§4). LCP reads the collision maps and the report
+the length map of §3.2) and the scalp patch and length map readers; the native ParticleSkin
+carries the real strands with the particles (§4). It reads the shared wind (WindParams). LCP reads the collision maps and the report
 tolerance; its response to the body is its own (body_friction), not the collision response
 settings.
 """
@@ -126,12 +126,6 @@ def draw_initialisation(layout, settings):
         vertex_group("length_group")
 
 
-def blend_weights(distances):
-    """Inverse-distance weights over each row, summing to 1."""
-    weights = 1.0 / np.maximum(distances, 1e-6)
-    return weights / weights.sum(axis=1, keepdims=True)
-
-
 def scalp_triangles(head, mesh, init):
     """The head mesh's triangles the artist marked as scalp (Bando 2003 §3.2): those whose
     corners all lie in the scalp vertex group, or those of the selected faces."""
@@ -254,76 +248,6 @@ def length_weights(groom, scalp_vertices_wo):
     return np.ascontiguousarray(lengths[closest] / longest, dtype=np.float32), longest
 
 
-class ParticleSkin:
-    """LCP's motion on real strands (Bando 2003 §4): every strand point moves with the
-    particles near its (u, v, s), in the distance of eq. 3 (scalp points apart, and arc
-    length). A strand point's scalp point is its root and s its arc length; a particle's
-    scalp point is where its hair leaves the scalp: x − s t for the fixed root particles, and
-    for the others that of the root particles nearest in (u, v). In the head's frame, the
-    point is displaced by the inverse-distance blend of the displacements of the
-    `neighbours_num` nearest particles since rest, so the groom keeps its shape at rest and
-    takes the particles' motion, and the head's own motion is carried exactly. Roots follow the
-    head rigidly; then, root to tip, each point is put at its rest distance from the previous
-    one toward where it was carried, or where the body's surface is when that is inside a
-    collider, so strands never stretch nor go through the body."""
-
-    def __init__(self, groom, solver, head_matrix, neighbours_num=4):
-        offsets = groom.curve_offsets
-        counts = np.diff(offsets)
-        self.roots = offsets[:-1]
-        points = groom.positions_wo.astype(np.float64)
-        self.rest_lengths = segment_lengths(groom)
-        arc = np.cumsum(self.rest_lengths)
-        arc -= np.repeat(arc[self.roots], counts)
-        strand_points = np.column_stack([np.repeat(points[self.roots], counts, axis=0), arc])
-
-        x = np.asarray(solver.positions, dtype=np.float64)
-        t = np.asarray(solver.directions, dtype=np.float64)
-        s = np.asarray(solver.s, dtype=np.float64)
-        scalp = x - s[:, None] * t
-        root = s < 0.0
-        if root.any() and not root.all():
-            uv = np.column_stack([solver.u, solver.v]).astype(np.float64)
-            near, distances = nearest(uv[~root], uv[root], 3)
-            scalp[~root] = (blend_weights(distances)[:, :, None] * scalp[root][near]).sum(axis=1)
-        self.neighbours, distances = nearest(
-            strand_points, np.column_stack([scalp, s]), neighbours_num
-        )
-        self.weights = blend_weights(distances)
-        self.rest_head = bridge.to_local(head_matrix, points)
-        self.particles_rest_head = bridge.to_local(head_matrix, x)
-        # Point k of every strand long enough to have one.
-        self.layers = [self.roots[counts > k] + k for k in range(1, int(counts.max()))]
-
-    def apply(self, particles_wo, head_matrix, colliders=None):
-        """Strand positions (N, 3) float32 for the particles' current positions; `colliders`
-        (a native ColliderSet, or None) keeps the points out of the body."""
-        moved = bridge.to_local(head_matrix, np.asarray(particles_wo, dtype=np.float64))
-        moved -= self.particles_rest_head
-        targets = bridge.to_world(
-            head_matrix,
-            self.rest_head + (self.weights[:, :, None] * moved[self.neighbours]).sum(axis=1),
-        )
-        positions = np.empty_like(targets)
-        positions[self.roots] = bridge.to_world(head_matrix, self.rest_head[self.roots])
-
-        def toward(layer, target):
-            step = target - positions[layer - 1]
-            length = np.maximum(np.linalg.norm(step, axis=1, keepdims=True), 1e-12)
-            return positions[layer - 1] + step * (self.rest_lengths[layer, None] / length)
-
-        for layer in self.layers:  # root to tip, all strands at once
-            positions[layer] = toward(layer, targets[layer])
-            for _ in range(0 if colliders is None else 2):  # swung out where it went inside
-                contacts = colliders.find_contacts(positions[layer])
-                inside = contacts["hit"] & (contacts["depth"] > 0.0)
-                if not inside.any():
-                    break
-                surface = contacts["surface_point"][inside] + 1e-4 * contacts["normal"][inside]
-                positions[layer[inside]] = toward(layer[inside], surface)
-        return positions
-
-
 class Lcp(Method):
     identifier = "LCP"
     label = "LCP"
@@ -332,7 +256,7 @@ class Lcp(Method):
         "over the scalp, loose springs keep its length, SPH interactions its "
         "density; the strands follow the particles"
     )
-    params = {"lcp": "LcpParams"}
+    params = {"lcp": "LcpParams", "wind": "WindParams"}
     options = {"lcp_init": HairdynLcpInit}
     collision = ("maps", "report")
     shows = ("use_billboards",)
@@ -384,8 +308,6 @@ class Lcp(Method):
             (
                 "air_friction",
                 "body_friction",
-                "wind_speed",
-                "wind_heading",
                 "wind_particle_spacing",
                 "wind_drag",
                 "air_density",
@@ -411,7 +333,7 @@ class Lcp(Method):
         self.collider_set = build.collider_set
         if self.collider_set is not None:  # moves rest particles out of the body: skin after
             self.solver.set_colliders(self.collider_set)
-        self.skin = ParticleSkin(build.groom, self.solver, build.head_matrix)
+        self.skin = build.native.ParticleSkin(build.groom, self.solver, build.head_matrix)
         self.strand_positions = self.skin.apply(
             self.solver.positions, build.head_matrix, self.collider_set
         )
@@ -444,10 +366,14 @@ class Lcp(Method):
             particles["v"],
             particles["s"],
             build.head_matrix,
+            wind=build.params("wind"),
         )
 
     def step(self, frame_dt, head_matrix):
-        self.solver.step(frame_dt, head_matrix)
+        try:
+            self.solver.step(frame_dt, head_matrix)
+        except ValueError as error:  # a refused or diverged frame, named by the solver
+            raise HairdynError(f"LCP: {error}") from None
         self.strand_positions = self.skin.apply(
             self.solver.positions, head_matrix, self.collider_set
         )

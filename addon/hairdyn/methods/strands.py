@@ -127,6 +127,11 @@ class Strands(Method):
 
     def step(self, frame_dt, head_matrix):
         self.solver.step(frame_dt, head_matrix)
+        if self.solver.diverged_num:
+            raise HairdynError(
+                f"{self.solver.diverged_num} strands diverged (their motion stopped being "
+                "finite): use the implicit integrator, more substeps or softer hinges"
+            )
         if self.children is not None:
             self.children.update(self.solver.positions, self.solver.root_frames)
 

@@ -12,4 +12,4 @@ settings.lcp.neighbor_num = 12
 settings.lcp.attraction_repulsion = True
 settings.lcp.hair_collision = True
 settings.lcp.hair_friction = True
-settings.lcp.wind_speed = 0.0
+settings.wind.speed = 0.0
