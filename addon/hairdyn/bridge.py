@@ -327,6 +327,13 @@ def _topology_matches(curves, curve_offsets):
     return np.array_equal(offsets, curve_offsets)
 
 
+def tapered_radius(sizes, root_radius):
+    """Per point of curves of these point counts: root_radius at the root, tapering linearly
+    to a fifth of it at the tip (a single hair; the groom's own radius is a guide's)."""
+    t = np.concatenate([np.linspace(0.0, 1.0, int(size)) for size in sizes])
+    return (root_radius * (1.0 - 0.8 * t)).astype(np.float32)
+
+
 def ensure_curves_output(obj, name, curve_offsets, like=None):
     """`obj` if it is a Curves object with this topology, otherwise a new one named `name`.
 
@@ -340,9 +347,11 @@ def ensure_curves_output(obj, name, curve_offsets, like=None):
         for material in like.data.materials:
             curves.materials.append(material)
         radius = like.data.attributes.get("radius")
-        if radius is not None and radius.domain == 'POINT' and len(radius.data) == len(curves.points):
+        if radius is not None and radius.domain == 'POINT' and len(radius.data):
             values = np.empty(len(radius.data), dtype=np.float32)
             radius.data.foreach_get("value", values)
+            if len(values) != len(curves.points):  # child hairs: thinner, tapering
+                values = tapered_radius(np.diff(curve_offsets), 0.5 * float(values.min()))
             curves.attributes.new("radius", 'FLOAT', 'POINT').data.foreach_set("value", values)
     new_obj = bpy.data.objects.new(name, curves)
     _link_like(new_obj, like)

@@ -40,6 +40,9 @@ def write(hair_obj, frame):
                 )
                 setattr(settings, slot, target)
                 bridge.write_curves(target, arrays["position"])
+                bridge.write_point_attributes(  # velocity, shell_normal, lod_level...
+                    target.data, {k: v for k, v in arrays.items() if k != "position"}
+                )
                 continue
             target = bridge.ensure_points_output(
                 getattr(settings, slot), target_name, like=hair_obj

@@ -146,6 +146,8 @@ def native_params(group, params_class, scene=None):
         elif not isinstance(value, (bool, int, float)):
             value = tuple(v / scale for v in value) if scale != 1.0 else tuple(value)
         elif isinstance(value, float) and scale != 1.0:
-            value = value / scale
+            # Blender keeps the shown value inside the shown range; ÷ scale may round just
+            # outside the SI one (90° → 1.5707963705 rad > π/2 as stored).
+            value = min(max(value / scale, field["min"]), field["max"])
         values[field["name"]] = value
     return params_class(**values)

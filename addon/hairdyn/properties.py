@@ -224,10 +224,8 @@ def preset_paths():
     return paths
 
 
-def settings_dict(settings):
-    """The solver parameters of a settings group as plain values (for a cache manifest):
-    every property but object pointers and the cache's own settings; images by name."""
-    skip = {
+_NOT_PARAMETERS = frozenset(
+    {
         "rna_type",
         "name",
         "enabled",
@@ -243,6 +241,13 @@ def settings_dict(settings):
         "uid",
         "bake_folder",
     }
+)
+
+
+def settings_dict(settings, skip=_NOT_PARAMETERS):
+    """The solver parameters of a settings group as plain values (for a cache manifest):
+    every property but object pointers and the cache's own settings (top level only: a
+    parameter group's own `enabled` is a parameter); images by name."""
     result = {}
     for prop in settings.bl_rna.properties:
         if prop.identifier in skip:
@@ -250,7 +255,7 @@ def settings_dict(settings):
         value = getattr(settings, prop.identifier)
         if prop.type == 'POINTER':
             if isinstance(value, bpy.types.PropertyGroup):
-                result[prop.identifier] = settings_dict(value)
+                result[prop.identifier] = settings_dict(value, skip={"rna_type", "name"})
             elif prop.fixed_type.identifier == 'Image':  # the length map: by name
                 result[prop.identifier] = value.name if value is not None else None
         elif prop.type == 'COLLECTION':

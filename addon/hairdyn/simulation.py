@@ -149,13 +149,14 @@ class Simulation:
             "position": positions,
             "velocity": self.velocities,
             "direction": point_tangents(self.groom.curve_offsets, positions),
+            **self.method.strand_attributes(),
         }
 
     def streams(self):
         """{name: Stream} of everything a frame produces: the strands (STRANDS: position,
         velocity, direction), then the method's own streams."""
         strands = Stream(
-            {"position": 3, "velocity": 3, "direction": 3},
+            {"position": 3, "velocity": 3, "direction": 3, **self.method.strand_columns},
             self.strand_arrays,
             self.groom.points_num,
             offsets=self.groom.curve_offsets,

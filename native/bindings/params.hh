@@ -18,7 +18,12 @@ namespace py = pybind11;
 template<typename T> std::string check_range(const T value, const ParamInfo &info)
 {
   const double v = double(value);
-  if (!std::isfinite(v) || v < info.min || v > info.max) {
+  /* The bounds as the field stores them: a float field set to its largest value (0.1 becomes
+   * 0.100000001f) is inside the range it shows. */
+  const auto stored = [](const double bound) {
+    return std::is_floating_point_v<T> && std::isfinite(bound) ? double(T(bound)) : bound;
+  };
+  if (!std::isfinite(v) || v < stored(info.min) || v > stored(info.max)) {
     std::ostringstream msg;
     msg << info.name << " (" << (info.symbol[0] ? info.symbol : info.name) << ") must be";
     if (std::isfinite(info.min) && std::isfinite(info.max)) {

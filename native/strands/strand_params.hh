@@ -170,7 +170,7 @@ struct StrandParams {
     fn(&StrandParams::line_density,
        ParamInfo{"line_density", "c", "kg/m", 1e-9, 1.0,
                  "Mass per length of a strand; sets the moment of inertia (Kurihara 1993, eq. 2)"}
-           .shown_as(1e6, "mg/m").soft(0.0, 1e-4));
+           .shown_as(1e6, "mg/m").soft(1e-9, 1e-4));
     fn(&StrandParams::gravity,
        ParamInfo{"gravity", "g", "m/s²", -100.0, 100.0,
                  "Gravitational acceleration in world space, from the scene (Kurihara 1993, "

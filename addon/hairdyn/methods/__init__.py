@@ -6,9 +6,13 @@ never names a method. `register(cls)` adds one at run time (the Method enum foll
 from .base import Build, Method, Section, Stream  # noqa: F401 - the adapters' interface
 from .follow import Follow
 from .lcp import Lcp
-from .strands import Strands
+from .strands import Strands, register_extension
+from . import swept_spheres, volume
 
 BUILTIN = (Follow, Strands, Lcp)
+# Groom-wide substep passes on the Strands method, in the order they run.
+for _extension in (volume.EXTENSION, swept_spheres.EXTENSION):
+    register_extension(_extension)
 
 _registry = {}  # identifier -> Method subclass, in registration order
 _listeners = []  # called with no argument when the registry changes (the Method enum)

@@ -106,6 +106,12 @@ class Method:
         """World-space strand positions (N, 3) float32 after the last step."""
         raise NotImplementedError
 
+    strand_columns = {}  # per strand point attributes it adds: {name: width}
+
+    def strand_attributes(self):
+        """{name: (N,) or (N, k) array} for strand_columns, after the last step."""
+        return {}
+
     def streams(self):
         """{name: Stream} of the other point sets it writes (names other than "frame")."""
         return {}

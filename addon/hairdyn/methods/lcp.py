@@ -1,9 +1,9 @@
 """Owns: the LCP method (Bando 2003, loosely connected particles; native LcpSolver) and what
 only it needs: its add-on-only initialisation options (where the particles start, the scalp,
 the length map of §3.2) and the scalp patch and length map readers; the native ParticleSkin
-carries the real strands with the particles (§4). It reads the shared wind (WindParams). LCP reads the collision maps and the report
-tolerance; its response to the body is its own (body_friction), not the collision response
-settings.
+carries the real strands with the particles (§4). It reads the shared wind (WindParams).
+LCP reads the collision maps and the report tolerance; its response to the body is its own
+(body_friction), not the collision response settings.
 """
 
 import bpy
@@ -313,6 +313,7 @@ class Lcp(Method):
                 "air_density",
             ),
         ),
+        Section("Wind", "wind", rest=True),  # the shared WindParams group: the air's free stream
         Section(
             "Initial Shape",
             "lcp",

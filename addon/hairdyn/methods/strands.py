@@ -17,12 +17,30 @@ from .base import Method, Section, Stream, nearest
 class Extension:
     """Something the strand solver runs each substep (native SubstepPass): params {settings
     attribute: native struct name}, options {settings attribute: PropertyGroup class},
-    sections (Section ...), attach(solver, build) adds the pass to a built solver."""
+    sections (Section ...), attach(solver, build) adds the pass to a built solver and returns
+    an `Attached` (or None when the artist left it off)."""
 
     def __init__(self, name, attach, params=None, options=None, sections=()):
         self.name, self.attach = name, attach
         self.params, self.options = dict(params or {}), dict(options or {})
         self.sections = tuple(sections)
+
+
+class Attached:
+    """An extension at work on one solver: after_step() once per frame, strand_columns and
+    strand_attributes() (per strand point arrays for the output Curves and the cache), and
+    its report fields."""
+
+    strand_columns = {}
+
+    def after_step(self, solver, head_matrix):
+        pass
+
+    def strand_attributes(self):
+        return {}
+
+    def report(self):
+        return {}
 
 
 def root_normals(groom, head_mesh):
@@ -107,8 +125,11 @@ class Strands(Method):
         self.children = self._make_children(build, params, head_mesh)
         if build.colliders is not None:
             self.solver.set_colliders(build.colliders.set, build.colliders.params)
-        for extension in self.extensions:
-            extension.attach(self.solver, build)
+        attached = (extension.attach(self.solver, build) for extension in self.extensions)
+        self.attached = [item for item in attached if item is not None]
+        self.strand_columns = {
+            name: width for item in self.attached for name, width in item.strand_columns.items()
+        }
 
     def _make_children(self, build, params, head_mesh):
         """Kurihara 1993 §4: child hairs clustered around the guides, or spread over the
@@ -132,8 +153,16 @@ class Strands(Method):
                 f"{self.solver.diverged_num} strands diverged (their motion stopped being "
                 "finite): use the implicit integrator, more substeps or softer hinges"
             )
+        for item in self.attached:
+            item.after_step(self.solver, head_matrix)
         if self.children is not None:
             self.children.update(self.solver.positions, self.solver.root_frames)
+
+    def strand_attributes(self):
+        return {k: v for item in self.attached for k, v in item.strand_attributes().items()}
+
+    def report(self):
+        return {k: v for item in self.attached for k, v in item.report().items()}
 
     @property
     def positions(self):

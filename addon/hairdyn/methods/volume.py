@@ -1,0 +1,146 @@
+"""Owns: the volume extension of the Strands method (Petrovic, Henne & Anderson 2006): velocity
+smoothing on a density grid (§5.1), directing the hair toward a target shape (§5.2, eq. 3),
+and hair-shell normals (§4.1, eq. 2) written as the `shell_normal` point attribute, with the
+Cycles material that shades hair by them. Native VolumePass / HairShell do the work.
+"""
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, PointerProperty
+
+from ..errors import HairdynError
+from .base import Section
+from .strands import Attached, Extension
+
+SHELL_MATERIAL = "hairdyn_shell_normals"
+
+
+def _is_curves(_self, obj):
+    return obj.type == 'CURVES'
+
+
+class HairdynVolumeOptions(bpy.types.PropertyGroup):
+    """Add-on options of the volume (Petrovic 2006): what is on, and the target shape."""
+
+    use_smoothing: BoolProperty(
+        name="Velocity Smoothing",
+        default=False,
+        description="Hair-hair friction and collision as velocity smoothing on the density "
+        "grid, each substep (Petrovic 2006 §5.1); strength is Smoothing (s)",
+    )
+    target: PointerProperty(
+        name="Target",
+        type=bpy.types.Object,
+        poll=_is_curves,
+        description="Curves object whose shape the hair is directed toward by the density "
+        "force of Petrovic 2006 §5.2 (eq. 3); empty: no targeting",
+    )
+    use_shell_normals: BoolProperty(
+        name="Shell Normals",
+        default=False,
+        description="Write the hair-shell normals N = ∇S (Petrovic 2006 §4.1, eq. 2) as the "
+        "point attribute shell_normal of the output curves, for the shell-normal material",
+    )
+
+
+class VolumeAttached(Attached):
+    def __init__(self, volume_pass, shell, groom):
+        self.volume_pass, self.shell, self.groom = volume_pass, shell, groom
+        self.ms, self.density_max, self.normals = [], 0.0, None
+        if shell is not None:
+            self.strand_columns = {"shell_normal": 3}
+            self.normals = np.array(shell.rest_normals, dtype=np.float32)
+
+    def after_step(self, solver, head_matrix):
+        if self.volume_pass is not None:
+            self.ms.append(solver.pass_ms("volume"))
+            self.density_max = max(self.density_max, self.volume_pass.density_max)
+        if self.shell is not None:
+            self.normals = self.shell.transport(solver.positions, head_matrix)
+
+    def strand_attributes(self):
+        return {} if self.normals is None else {"shell_normal": self.normals}
+
+    def report(self):
+        if self.volume_pass is None:
+            return {}
+        figures = {"volume_ms": float(np.median(self.ms)) if self.ms else 0.0,
+                   "density_max": float(self.density_max)}
+        if self.volume_pass.has_target:
+            figures["target_error"] = float(self.volume_pass.target_error)
+        return figures
+
+
+def attach(solver, build):
+    options = build.settings.volume_options
+    if not (options.use_smoothing or options.target or options.use_shell_normals):
+        return None
+    from .. import bridge
+
+    params = build.params("volume")
+    groom = build.groom
+    volume_pass = None
+    if options.use_smoothing or options.target:
+        if not options.use_smoothing:
+            params.smoothing = 0.0
+        volume_pass = build.native.VolumePass(params)
+        if options.target is not None:
+            target = bridge.read_curves(options.target, build.depsgraph)
+            volume_pass.set_target(target.curve_offsets, target.positions_wo, build.head_matrix)
+        solver.add_pass(volume_pass)
+    shell = None
+    if options.use_shell_normals:
+        try:
+            shell = build.native.HairShell(
+                groom.curve_offsets, groom.positions_wo, build.head_matrix, params
+            )
+        except ValueError as error:
+            raise HairdynError(f"Shell normals: {error} (lower Shell Threshold)") from None
+        ensure_shell_material()
+    return VolumeAttached(volume_pass, shell, groom)
+
+
+def ensure_shell_material():
+    """Hair shaded with the shell normals (Petrovic 2006 §4.1, Fig. 3(b)): a diffuse lobe about
+    N = shell_normal, as if the hair volume were a surface, plus the strands' own highlight
+    (the Principled Hair BSDF's reflection). Assign it to the output curves."""
+    material = bpy.data.materials.get(SHELL_MATERIAL)
+    if material is not None:
+        return material
+    material = bpy.data.materials.new(SHELL_MATERIAL)
+    material.use_nodes = True
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    nodes.clear()
+    normal = nodes.new("ShaderNodeAttribute")
+    normal.attribute_name = "shell_normal"
+    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (0.32, 0.17, 0.08, 1.0)
+    links.new(normal.outputs["Vector"], diffuse.inputs["Normal"])
+    highlight = nodes.new("ShaderNodeBsdfHair")
+    highlight.component = 'Reflection'
+    highlight.inputs["Color"].default_value = (0.8, 0.7, 0.6, 1.0)
+    mix = nodes.new("ShaderNodeAddShader")
+    links.new(diffuse.outputs[0], mix.inputs[0])
+    links.new(highlight.outputs[0], mix.inputs[1])
+    output = nodes.new("ShaderNodeOutputMaterial")
+    links.new(mix.outputs[0], output.inputs["Surface"])
+    return material
+
+
+EXTENSION = Extension(
+    "volume",
+    attach,
+    params={"volume": "VolumeParams"},
+    options={"volume_options": HairdynVolumeOptions},
+    sections=(
+        Section(
+            "Volume (Petrovic 2006)",
+            "volume",
+            rest=True,
+            draw=lambda layout, settings: [
+                layout.prop(settings.volume_options, name)
+                for name in ("use_smoothing", "target", "use_shell_normals")
+            ],
+        ),
+    ),
+)
