@@ -180,3 +180,30 @@ TEST(CollisionRobustness, RandomTransformsAndPointsAgreeBatchedAndPerPoint)
   }
   EXPECT_GT(hits, 100); /* The ordinary trials found contacts, and they agreed. */
 }
+
+TEST(CollisionRobustness, PenetrationReportsRootsInsideApart)
+{
+  /* Unit sphere (24 × 13 facets: depths within about 3% of the radius of the analytic ones).
+   * Strand 0's root starts 0.1 inside, the rest of it is outside; strand 1's root is outside
+   * and its middle point 0.05 inside. */
+  ColliderSet set;
+  set.add(sphere_collider(MapKind::Auto));
+  const std::vector<vec3> points = {{0.9f, 0, 0}, {1.2f, 0, 0}, {1.5f, 0, 0},
+                                    {0, 1.1f, 0}, {0, 0.95f, 0}, {0, 1.3f, 0}};
+  const std::vector<int32_t> offsets = {0, 3, 6};
+  const float tolerance = 0.01f;
+  const PenetrationStats all = set.penetration_stats(points, tolerance);
+  EXPECT_EQ(all.points_num, 6);
+  EXPECT_EQ(all.deeper_num, 2);
+  EXPECT_NEAR(all.max_depth, 0.1f, 0.03f);
+  EXPECT_EQ(all.roots_inside, 0); /* Not asked for: nothing counted apart. */
+
+  const PenetrationStats apart = set.penetration_stats(points, tolerance, offsets);
+  EXPECT_EQ(apart.roots_inside, 1);
+  EXPECT_NEAR(apart.roots_depth_max, 0.1f, 0.03f);
+  EXPECT_EQ(apart.points_num, 4);
+  EXPECT_EQ(apart.deeper_num, 1);
+  EXPECT_NEAR(apart.max_depth, 0.05f, 0.03f);
+  EXPECT_LT(apart.max_depth, apart.roots_depth_max);
+  EXPECT_FLOAT_EQ(apart.share, 0.25f);
+}

@@ -255,14 +255,35 @@ float ColliderSet::size_wo() const
 }
 
 PenetrationStats ColliderSet::penetration_stats(const Span<vec3> points_wo,
-                                                const float tolerance_wo) const
+                                                const float tolerance_wo,
+                                                const Span<int32_t> curve_offsets) const
 {
   std::vector<float> depths(size_t(points_wo.size()), 0.0f);
   for (const std::shared_ptr<Collider> &collider : colliders_) {
     accumulate_penetration_depths(collider->exact(), collider->object_to_world(), points_wo,
                                   depths);
   }
-  return hairdyn::penetration_stats(depths, tolerance_wo);
+  if (curve_offsets.is_empty()) {
+    return hairdyn::penetration_stats(depths, tolerance_wo);
+  }
+  /* Roots apart: their depths out of the list, counted on their own. */
+  std::vector<float> others;
+  others.reserve(depths.size());
+  int64_t roots_inside = 0;
+  float roots_depth_max = 0.0f;
+  for (int64_t curve = 0; curve + 1 < curve_offsets.size(); curve++) {
+    const int32_t root = curve_offsets[curve];
+    if (curve_offsets[curve + 1] == root) {
+      continue;
+    }
+    roots_inside += depths[size_t(root)] > tolerance_wo ? 1 : 0;
+    roots_depth_max = std::max(roots_depth_max, depths[size_t(root)]);
+    others.insert(others.end(), depths.begin() + root + 1, depths.begin() + curve_offsets[curve + 1]);
+  }
+  PenetrationStats stats = hairdyn::penetration_stats(others, tolerance_wo);
+  stats.roots_inside = roots_inside;
+  stats.roots_depth_max = roots_depth_max;
+  return stats;
 }
 
 /* One batch of the parallel query, compiled twice (chosen when the module loads): for AVX2

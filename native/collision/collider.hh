@@ -307,8 +307,11 @@ class ColliderSet {
   }
   /* The smallest collider's size in world units (for tolerances relative to collider size). */
   float size_wo() const;
-  /* Exact penetration of points into the real triangles of all colliders (deepest per point). */
-  PenetrationStats penetration_stats(Span<vec3> points_wo, float tolerance_wo) const;
+  /* Exact penetration of points into the real triangles of all colliders (deepest per point).
+   * Given the strands' curve offsets (valid for points_wo), the roots are left out of
+   * max_depth, share and points_num and reported in roots_inside and roots_depth_max. */
+  PenetrationStats penetration_stats(Span<vec3> points_wo, float tolerance_wo,
+                                     Span<int32_t> curve_offsets = {}) const;
 
  private:
   std::vector<std::shared_ptr<Collider>> colliders_;

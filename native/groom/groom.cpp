@@ -36,7 +36,8 @@ static int64_t first_short_segment(const Span<int32_t> curve_offsets, const Span
   return -1;
 }
 
-std::string find_groom_error(const Span<int32_t> curve_offsets, const Span<vec3> positions)
+std::string find_groom_error(const Span<int32_t> curve_offsets, const Span<vec3> positions,
+                             const bool check_segments)
 {
   std::ostringstream msg;
   if (curve_offsets.size() < 2) {
@@ -68,6 +69,9 @@ std::string find_groom_error(const Span<int32_t> curve_offsets, const Span<vec3>
       msg << "point " << i << " has a position that is not a finite number (NaN or infinity)";
       return msg.str();
     }
+  }
+  if (!check_segments) {
+    return {};
   }
   const float min_length = min_segment_length(positions);
   for (int64_t curve = 0; curve + 1 < curve_offsets.size(); curve++) {

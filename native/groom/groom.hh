@@ -26,8 +26,9 @@ float min_segment_length(Span<vec3> positions);
 /* Returns an empty string when the groom is valid, otherwise one sentence that says what is
  * wrong and where: offsets start at 0, never decrease, end at the point count; every strand
  * has at least two points; every position is finite; no segment is shorter than
- * min_segment_length(positions). */
-std::string find_groom_error(Span<int32_t> curve_offsets, Span<vec3> positions);
+ * min_segment_length(positions) (unless check_segments is false). */
+std::string find_groom_error(Span<int32_t> curve_offsets, Span<vec3> positions,
+                             bool check_segments = true);
 
 /* r_degenerate[c] = 1 for each strand c with a segment shorter than
  * min_segment_length(positions) (the strands a reader drops, with a warning, rather than
