@@ -16,6 +16,7 @@ report still written when possible), 2 bad command line (unknown object, paramet
 import argparse
 import json
 import sys
+import traceback
 from pathlib import Path
 
 USAGE_ERROR = 2
@@ -199,38 +200,57 @@ def _bake(args, obj, start, end):
 
 
 def main(argv):
+    """Runs the command line; returns the exit code. Every failure, whatever raised it, is one
+    line on stderr and exit code 1 (2 for a bad command line): under the blender binary an
+    exception escaping this function would still end the process with exit code 0."""
     try:
         args = _arguments(argv)
     except SystemExit as exit_:
         return USAGE_ERROR if exit_.code else 0
+    try:
+        return _main(args)
+    except UsageError as error:
+        print(f"hairdyn: error: {error}", file=sys.stderr)
+        return USAGE_ERROR
+    except Exception as error:  # noqa: BLE001 - the one place every failure becomes exit 1
+        print(f"hairdyn: error: {_message(error)}", file=sys.stderr)
+        return RUN_ERROR
+
+
+def _message(error):
+    """One sentence for any exception: hairdyn's own are written for the user; anything else
+    is named by its type (and where it came from, for a bug report)."""
+    if any(kind.__name__ == "HairdynError" for kind in type(error).__mro__):
+        return str(error)
+    if isinstance(error, OSError) and error.filename is not None:
+        return f"cannot access '{error.filename}': {error.strerror or error}"
+    if isinstance(error, MemoryError):
+        return "out of memory"
+    frames = traceback.extract_tb(error.__traceback__)
+    where = f" (in {Path(frames[-1].filename).name}, line {frames[-1].lineno})" if frames else ""
+    return f"unexpected {type(error).__name__}: {error}{where}"
+
+
+def _main(args):
     import bpy
 
     hairdyn = _ensure_addon()
     from hairdyn import simulation
-    from hairdyn.errors import HairdynError
 
-    try:
-        if args.blend:
-            if not Path(args.blend).is_file():
-                raise UsageError(f"there is no .blend file at '{args.blend}'")
-            bpy.ops.wm.open_mainfile(filepath=str(Path(args.blend).resolve()))
-        obj = bpy.data.objects.get(args.object)
-        if obj is None:
-            hair = [o.name for o in bpy.data.objects if hairdyn.bridge.is_hair_object(o)]
-            raise UsageError(f"there is no object named '{args.object}'; hair objects: "
-                             f"{', '.join(hair) or 'none'}")
-        apply_settings(obj.hairdyn, args.set)
-        start, end = args.frames or (obj.hairdyn.frame_start, obj.hairdyn.frame_end)
-    except UsageError as error:
-        print(f"hairdyn: error: {error}", file=sys.stderr)
-        return USAGE_ERROR
+    if args.blend:
+        if not Path(args.blend).is_file():
+            raise UsageError(f"there is no .blend file at '{args.blend}'")
+        bpy.ops.wm.open_mainfile(filepath=str(Path(args.blend).resolve()))
+    obj = bpy.data.objects.get(args.object)
+    if obj is None:
+        hair = [o.name for o in bpy.data.objects if hairdyn.bridge.is_hair_object(o)]
+        raise UsageError(f"there is no object named '{args.object}'; hair objects: "
+                         f"{', '.join(hair) or 'none'}")
+    apply_settings(obj.hairdyn, args.set)
+    start, end = args.frames or (obj.hairdyn.frame_start, obj.hairdyn.frame_end)
 
-    try:
-        report = _bake(args, obj, start, end) if args.command == "bake" else \
-            simulation.run(bpy.context, obj, start, end, on_frame=_progress)
-    except HairdynError as error:
-        print(f"hairdyn: error: {error}", file=sys.stderr)
-        return RUN_ERROR
+    report = _bake(args, obj, start, end) if args.command == "bake" else \
+        simulation.run(bpy.context, obj, start, end, on_frame=_progress)
     text = json.dumps(report, indent=2)
     if args.report:
         Path(args.report).write_text(text + "\n")

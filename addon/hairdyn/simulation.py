@@ -501,7 +501,8 @@ class Runner:
             context.scene.frame_set(frame_start)
         self.simulation = Simulation(hair_obj, context.evaluated_depsgraph_get(), context.scene)
         if cache is not None:
-            cache.check_topology(self.simulation.groom.curve_offsets)
+            cache.check_topology(self.simulation.groom.curve_offsets,
+                                 self.simulation.groom.positions_wo)
         self.dt = frame_dt(context.scene)
         self.next_frame = frame_start
         self.step_ms, self.collision_ms, self.nan_frames, self.stretch_max = [], [], 0, 0.0
@@ -632,15 +633,7 @@ def start_bake(context, hair_obj, resume_after=None):
         if cache.manifest["parameters"] != parameters:
             raise HairdynError("The parameters changed since this bake started: bake from the "
                                "start, or restore them")
-        last = cache.last_contiguous_frame()
-        if last is None or last < cache.manifest["frame_start"]:
-            raise HairdynError(f"There is no baked frame to continue from in '{directory}'")
-        last = min(last, resume_after)
-        if last >= cache.manifest["frame_end"]:
-            raise HairdynError(f"The bake in '{directory}' is already complete")
-        for frame in cache.frames():
-            if frame > last:
-                cache.frame_path(frame).unlink()
+        last = cache.prepare_resume(resume_after)
         return Runner(context, hair_obj, cache.manifest["frame_start"], cache.manifest["frame_end"],
                       cache=cache, resume_from=last)
     runner = Runner(context, hair_obj, settings.frame_start, settings.frame_end)
@@ -650,7 +643,7 @@ def start_bake(context, hair_obj, resume_after=None):
         columns=runner.simulation.frame_columns(), frame_start=settings.frame_start,
         frame_end=settings.frame_end, fps=1.0 / runner.dt,
         streams=runner.simulation.stream_layouts(),
-        extra={"object": hair_obj.name})
+        extra={"object": hair_obj.name}, rest_positions=runner.simulation.groom.positions_wo)
     playback.forget(directory)
     return runner
 
