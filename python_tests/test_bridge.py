@@ -259,6 +259,7 @@ def test_zero_length_strands_are_dropped_with_a_count(empty_scene):
                                   "(shorter than a millionth of the groom's size) and were "
                                   "left out"]
     obj.data.position_data.foreach_set("vector", np.zeros(27, np.float32))
+    obj.data.update_tag()
     with pytest.raises(HairdynError, match="Every strand of 'BadHair' \\(3\\) has a zero-length"):
         bridge.read_groom(obj, depsgraph())
 

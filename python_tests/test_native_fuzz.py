@@ -123,7 +123,9 @@ FUZZ = textwrap.dedent('''
 def test_every_binding_survives_hostile_input(seed, tmp_path):
     script = tmp_path / "fuzz.py"
     script.write_text(FUZZ)
-    python = sys.executable if "python" in Path(sys.executable).name else "/usr/bin/python3.11"
+    # A Python with numpy that can import the add-on package (bpy): the venv's, in both hosts.
+    venv = ROOT / ".venv" / "bin" / "python"
+    python = str(venv) if venv.exists() else sys.executable
     result = subprocess.run([python, str(script), str(ROOT / "addon"), str(seed), "1500"],
                             capture_output=True, text=True, timeout=600,
                             env={"OMP_NUM_THREADS": "1", "PATH": "/usr/bin:/bin"})

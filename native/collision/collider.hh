@@ -128,6 +128,17 @@ float mean_depth_error(const Map &map, const MeshDistance &exact, const Span<vec
   return points_object.is_empty() ? 0.0f : float(sum / double(points_object.size()));
 }
 
+/* The per-point query of a Collider or a ColliderSet: the batched query with a batch of one. */
+template<typename Colliders>
+bool find_contact_of(const Colliders &colliders, const vec3 &p_wo, Contact &r_contact)
+{
+  ContactBatch<1> contacts;
+  contacts.load(Span<vec3>(&p_wo, 1));
+  MapBatch<1> scratch;
+  colliders.accumulate_contacts(contacts, scratch);
+  return contacts.read(0, r_contact);
+}
+
 /* A rigid or affine map between spaces, applied as linear * p + translation. */
 struct Affine {
   mat3 linear{1.0f};
@@ -155,11 +166,7 @@ class Collider {
   /* The deepest contact of p with any part; false when p is inside none. */
   bool find_contact(const vec3 &p_wo, Contact &r_contact) const
   {
-    ContactBatch<1> contacts;
-    contacts.load(Span<vec3>(&p_wo, 1));
-    MapBatch<1> scratch;
-    accumulate_contacts(contacts, scratch);
-    return contacts.read(0, r_contact);
+    return find_contact_of(*this, p_wo, r_contact);
   }
 
   /* Updates each point of `contacts` that is inside a part deeper than its contact so far
@@ -290,11 +297,7 @@ class ColliderSet {
   /* The deepest contact of p_wo with any collider; false when p_wo is inside none. */
   bool find_contact(const vec3 &p_wo, Contact &r_contact) const
   {
-    ContactBatch<1> contacts;
-    contacts.load(Span<vec3>(&p_wo, 1));
-    MapBatch<1> scratch;
-    accumulate_contacts(contacts, scratch);
-    return contacts.read(0, r_contact);
+    return find_contact_of(*this, p_wo, r_contact);
   }
   /* The batched query over every collider (the deepest contact wins; ties keep the first). */
   template<int64_t N>
