@@ -240,3 +240,36 @@ def test_not_hair_is_a_clear_error(open_fixture):
     open_fixture("head_curves.blend")
     with pytest.raises(HairdynError, match="'Camera' is not hair"):
         bridge.read_groom(bpy.data.objects["Camera"], depsgraph())
+
+
+def test_zero_length_strands_are_dropped_with_a_count(empty_scene):
+    head = bpy.data.objects.new("Head", bpy.data.meshes.new("Head"))
+    empty_scene.collection.objects.link(head)
+    obj = make_hair(empty_scene, [3, 3, 3])
+    positions = np.array([[0, 0, 0], [0, 0, .1], [0, 0, .2],
+                          [.1, 0, 0], [.1, 0, 0], [.1, 0, 0],  # three points on one spot
+                          [.2, 0, 0], [.2, 0, .1], [.2, 0, .2]], np.float32)
+    obj.data.position_data.foreach_set("vector", positions.ravel())
+    obj.hairdyn.head = head
+    obj.hairdyn.use_collision = False
+    sim = simulation.Simulation(obj, depsgraph(), empty_scene)
+    assert sim.groom.curves_num == 2 and sim.groom.points_num == 6
+    assert np.array_equal(sim.groom.curve_offsets, [0, 3, 6])
+    assert sim.groom.warnings == ["1 of the 3 strands of 'BadHair' have a zero-length segment "
+                                  "(shorter than a millionth of the groom's size) and were "
+                                  "left out"]
+    obj.data.position_data.foreach_set("vector", np.zeros(27, np.float32))
+    obj.data.update_tag()
+    with pytest.raises(HairdynError, match="Every strand of 'BadHair' \\(3\\) has a zero-length"):
+        bridge.read_groom(obj, depsgraph())
+
+
+def test_head_without_vertices_is_a_clear_error(empty_scene):
+    head = bpy.data.objects.new("Head", bpy.data.meshes.new("Head"))
+    empty_scene.collection.objects.link(head)
+    obj = make_hair(empty_scene, [3])
+    obj.data.position_data.foreach_set("vector", np.float32([0, 0, 0, 0, 0, .1, 0, 0, .2]))
+    obj.hairdyn.head = head
+    obj.hairdyn.method = 'STRANDS'
+    with pytest.raises(HairdynError, match="The mesh 'Head' has no vertices"):
+        simulation.Simulation(obj, depsgraph(), empty_scene)

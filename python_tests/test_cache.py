@@ -240,3 +240,70 @@ def test_reloading_the_file_during_playback_forgets_the_open_caches(saved_shake)
     hair = bpy.data.objects["Hair"]
     cache = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
     assert np.array_equal(read_output(hair), cache.read_frame(4)["position"])
+
+
+def bake_through(hair, resume_after=None):
+    """The bake as the command line runs it; returns the runner."""
+    runner = bake.start_bake(bpy.context, hair, resume_after)
+    try:
+        while not runner.done:
+            runner.advance()
+    finally:
+        bake.finish_bake(runner)
+    return runner
+
+
+def test_resume_rebakes_truncated_garbage_and_nan_frames(saved_shake):
+    hair, tmp_path = saved_shake
+    directory = tmp_path / "hairdyn_cache" / "Hair"
+    bake_through(hair)
+    first = {f: Cache.open(directory).frame_path(f).read_bytes() for f in range(1, 25)}
+    cache = Cache.open(directory)
+    nan = cache.read_frame(14)["position"].copy()
+    table = np.load(cache.frame_path(14))
+    table[3, 0] = np.nan
+    np.save(cache.frame_path(14), table)  # a NaN frame of the right shape
+    cache.frame_path(18).write_bytes(first[18][:100])  # truncated
+    cache.frame_path(20).write_bytes(b"\x93NUMPY garbage" * 10)  # garbage
+    for frame in (14, 18, 20):
+        assert Cache.open(directory).frame_problem(frame) is not None
+    assert np.isfinite(nan).all()
+    runner = bake.start_bake(bpy.context, hair, 24)
+    assert runner.next_frame == 14  # frames 1..13 kept, 14 onwards baked again
+    assert Cache.open(directory).manifest["complete"] is False
+    assert Cache.open(directory).frames() == list(range(1, 14))
+    while not runner.done:
+        runner.advance()
+    bake.finish_bake(runner)
+    resumed = {f: Cache.open(directory).frame_path(f).read_bytes() for f in range(1, 25)}
+    assert resumed == first
+    assert Cache.open(directory).manifest["complete"] is True
+
+
+def test_resume_over_a_directory_frame_is_refused(saved_shake):
+    hair, tmp_path = saved_shake
+    directory = tmp_path / "hairdyn_cache" / "Hair"
+    bake_through(hair)
+    cache = Cache.open(directory)
+    cache.frame_path(10).unlink()
+    cache.frame_path(10).mkdir()
+    with pytest.raises(CacheError, match="frame_000010.npy' is a directory"):
+        bake.start_bake(bpy.context, hair, 24)
+    assert Cache.open(directory).manifest["complete"] is False
+    with pytest.raises(CacheError, match="is a directory"):
+        Cache.open(directory).read_frame(10)
+
+
+def test_resume_after_the_groom_moved_is_refused(saved_shake):
+    hair, tmp_path = saved_shake
+    bake_through(hair)
+    positions = np.empty((len(hair.data.points), 3), np.float32)
+    hair.data.position_data.foreach_get("vector", positions.ravel())
+    positions[:, 2] += np.float32(0.01)  # 1 cm up, same strands
+    hair.data.position_data.foreach_set("vector", positions.ravel())
+    hair.data.update_tag()
+    cache = Cache.open(tmp_path / "hairdyn_cache" / "Hair")
+    for frame in range(13, 25):
+        cache.frame_path(frame).unlink()
+    with pytest.raises(CacheError, match="points moved since the bake"):
+        bake.start_bake(bpy.context, hair, 24)

@@ -75,3 +75,80 @@ def test_simulation_failure_exits_1(capsys):
                      "--frames", "5", "1"])
     assert code == 1
     assert "frame range 5..1 is empty" in capsys.readouterr().err
+
+
+def test_any_exception_ends_in_one_line_and_exit_1(monkeypatch, capsys):
+    """Whatever raises (here a bug stand-in), the command line says so in one last line (after
+    the traceback of a bug) and exits 1: under the blender binary an escaping exception would
+    end the process with code 0."""
+    from hairdyn import cli, simulation
+
+    def broken(*_args, **_kwargs):
+        raise ZeroDivisionError("float division by zero")
+
+    monkeypatch.setattr(simulation, "run", broken)
+    code = cli.main(["--blend", str(FIXTURES / "head_curves.blend"), "run", "--object", "Hair",
+                     "--frames", "1", "2"])
+    assert code == 1
+    err = capsys.readouterr().err.strip().splitlines()  # the traceback, then one line
+    assert err[-1].startswith("hairdyn: error: Internal error in hairdyn (ZeroDivisionError")
+
+
+def bake_args(cache, *more):
+    return ["--blend", str(FIXTURES / "head_curves.blend"), "bake", "--object", "Hair",
+            "--frames", "1", "6", "--cache", str(cache), "--report", str(cache.parent / "r.json"),
+            *more]
+
+
+def test_resume_into_a_read_only_cache_exits_1(tmp_path, monkeypatch, capsys):
+    """Root ignores file modes, so the read-only cache is simulated: removing or replacing a
+    file fails with EACCES, as it would on a read-only mount."""
+    import os
+    from pathlib import Path
+
+    from hairdyn import cli
+    from hairdyn.cache import Cache
+
+    cache_dir = tmp_path / "cache"
+    assert cli.main(bake_args(cache_dir)) == 0
+    Cache.open(cache_dir / "Hair").frame_path(6).unlink()
+    Cache.open(cache_dir / "Hair").frame_path(5).write_bytes(b"torn")
+
+    def refuse(*_args, **_kwargs):
+        raise PermissionError(13, "Permission denied", str(cache_dir))
+
+    monkeypatch.setattr(Path, "unlink", refuse)
+    monkeypatch.setattr(os, "replace", refuse)
+    capsys.readouterr()
+    assert cli.main(bake_args(cache_dir, "--resume")) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err and err[-1].startswith("hairdyn: error:") and "Permission denied" in err[-1]
+
+
+def test_absurd_manifest_point_count_exits_1(tmp_path, capsys):
+    from hairdyn import cli
+    from hairdyn.cache import Cache
+
+    cache_dir = tmp_path / "cache"
+    assert cli.main(bake_args(cache_dir)) == 0
+    manifest_path = Cache.manifest_path(cache_dir / "Hair")
+    manifest = json.loads(manifest_path.read_text())
+    manifest["topology"]["points"] = 10**30
+    manifest_path.write_text(json.dumps(manifest))
+    capsys.readouterr()
+    assert cli.main(bake_args(cache_dir, "--resume")) == 1
+    assert "point count" in capsys.readouterr().err
+
+
+def test_resume_over_a_directory_frame_exits_1_in_a_real_process(tmp_path):
+    cache_dir = tmp_path / "cache"
+    args = bake_args(cache_dir)[2:]  # run_cli gives the .blend itself
+    result = run_cli("head_curves.blend", *args)
+    assert result.returncode == 0, result.stderr
+    frame = cache_dir / "Hair" / "frame_000003.npy"
+    frame.unlink()
+    frame.mkdir()
+    result = run_cli("head_curves.blend", *args, "--resume")
+    assert result.returncode == 1, result.stderr + result.stdout
+    assert "frame_000003.npy' is a directory" in result.stderr
+    assert "Traceback" not in result.stderr

@@ -1,5 +1,6 @@
 """The main job's pictures (`make demo`, scripts/demo.py), made small: the video of the whole
 bake, the Cycles still and the follow-head / simulation side-by-side."""
+
 import importlib.util
 
 import numpy as np
@@ -18,8 +19,9 @@ def test_demo_video_still_and_side_by_side(open_fixture, artifacts):
     open_fixture("head_shake.blend")
     demo = load_demo()
     out = artifacts / f"demo_{demo.bpy.app.version_string.split()[0]}"
-    wrote = demo.run(out, 'STRANDS', size=(192, 108), samples=2, video_size=(160, 90),
-                     frames=(1, 10))
+    wrote = demo.run(
+        out, 'STRANDS', size=(192, 108), samples=2, video_size=(160, 90), frames=(1, 10)
+    )
     assert wrote["report"]["frames"] == 10
     # The movie holds every baked frame, and is a real movie, not an empty container.
     assert demo.movie_frames(wrote["video"]) == 10

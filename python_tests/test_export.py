@@ -2,6 +2,7 @@
 own exporters, read back with Blender's own importers: positions equal to the cache at three
 frames. Hosts without an exporter (Debian's Blender 3.4 has neither) skip, naming it, and the
 operator says why it is unavailable."""
+
 import json
 import subprocess
 import sys
@@ -10,7 +11,7 @@ import bpy
 import numpy as np
 import pytest
 
-from conftest import FIXTURES, ROOT, host_name
+from conftest import ROOT, host_name
 
 FRAMES = (1, 6)
 CHECKED = (2, 4, 6)
@@ -47,8 +48,7 @@ def _imported_curves(importer, path):
     return [o for o in bpy.data.objects if o not in before and o.type == 'CURVES']
 
 
-@pytest.mark.parametrize("suffix, importer", [(".abc", "alembic_import"),
-                                              (".usd", "usd_import")])
+@pytest.mark.parametrize("suffix, importer", [(".abc", "alembic_import"), (".usd", "usd_import")])
 def test_export_round_trip_matches_the_cache(suffix, importer, baked_shake, tmp_path):
     from hairdyn import export
 
@@ -74,16 +74,20 @@ def test_export_round_trip_matches_the_cache(suffix, importer, baked_shake, tmp_
         got = export.read_positions(guides, depsgraph)
         # float32 positions written and read back: equal to within a few ulps of ~1.5 m
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-6)
-        np.testing.assert_allclose(export.read_positions(children, depsgraph),
-                                   cache.read_stream("children", frame)["position"],
-                                   rtol=0, atol=1e-6)
+        np.testing.assert_allclose(
+            export.read_positions(children, depsgraph),
+            cache.read_stream("children", frame)["position"],
+            rtol=0,
+            atol=1e-6,
+        )
         moved.append(expected)
         if suffix == ".usd":  # USD carries the point attributes too (Alembic: radius only)
             curves = guides.evaluated_get(depsgraph).data
             velocity = np.empty(len(curves.points) * 3, dtype=np.float32)
             curves.attributes["velocity"].data.foreach_get("vector", velocity)
-            np.testing.assert_allclose(velocity.reshape(-1, 3),
-                                       cache.read_frame(frame)["velocity"], rtol=0, atol=1e-5)
+            np.testing.assert_allclose(
+                velocity.reshape(-1, 3), cache.read_frame(frame)["velocity"], rtol=0, atol=1e-5
+            )
             assert "direction" in curves.attributes
     assert np.abs(moved[0] - moved[2]).max() > 1e-3  # the frames differ: a real animation
 
@@ -129,8 +133,16 @@ def test_cli_export(baked_shake, tmp_path):
     cli = ROOT / "addon" / "hairdyn" / "cli.py"
     args = ["export", "--object", "Hair", "--file", str(out), "--cache", str(tmp_path / "cache")]
     if host_name() == "blender":
-        command = [bpy.app.binary_path, "-b", "--factory-startup", str(blend), "--python",
-                   str(cli), "--", *args]
+        command = [
+            bpy.app.binary_path,
+            "-b",
+            "--factory-startup",
+            str(blend),
+            "--python",
+            str(cli),
+            "--",
+            *args,
+        ]
     else:
         command = [sys.executable, str(cli), "--blend", str(blend), *args]
     process = subprocess.run(command, capture_output=True, text=True, timeout=300)
@@ -139,7 +151,7 @@ def test_cli_export(baked_shake, tmp_path):
         assert process.returncode == 1 and reason in process.stderr, process.stderr
         return
     assert process.returncode == 0, process.stderr[-2000:]
-    result = json.loads(process.stdout[process.stdout.index("{"):])
+    result = json.loads(process.stdout[process.stdout.index("{") :])
     assert result["file"] == str(out) and out.stat().st_size > 1000
     if suffix == ".usda":  # a text file: the positions are animated, frame by frame
         assert out.read_text().count("points.timeSamples") >= 1

@@ -1,5 +1,6 @@
 """The per-frame record beside a bake: rows by frame, a CSV and a PNG plot; its summary
 equals the bake report's figures when fed by the bake's own figures."""
+
 import bpy
 import numpy as np
 import pytest
@@ -9,27 +10,40 @@ from hairdyn import frame_record
 
 def test_record_round_trip_and_plot(tmp_path):
     record = frame_record.start(tmp_path)
-    rows = {f: {"ms": 1.0 + f, "penetration_share": 0.01 * f, "stretch": 1e-5 * f,
-                "kinetic_energy": 0.5 * f * f, "contacts": 3 * f} for f in range(1, 11)}
+    rows = {
+        f: {
+            "ms": 1.0 + f,
+            "penetration_share": 0.01 * f,
+            "stretch": 1e-5 * f,
+            "kinetic_energy": 0.5 * f * f,
+            "contacts": 3 * f,
+        }
+        for f in range(1, 11)
+    }
     for frame in (3, 1, 2, *range(4, 11)):  # order of arrival does not matter
         record.add(frame, rows[frame])
     png = record.finish()
     assert png == tmp_path / "frame_record.png" and png.is_file()
-    assert frame_record.read(tmp_path / "frame_record.csv") == \
-        {f: {k: float(v) for k, v in row.items()} for f, row in rows.items()}
+    assert frame_record.read(tmp_path / "frame_record.csv") == {
+        f: {k: float(v) for k, v in row.items()} for f, row in rows.items()
+    }
     summary = record.summary()
     # median of 2..11 is 6.5; the largest stretch is frame 10's; the mean share of 0.01..0.1
-    assert summary == {"frames": 10, "ms_per_frame": 6.5, "stretch_max": pytest.approx(1e-4),
-                       "penetration_share": pytest.approx(0.055)}
+    assert summary == {
+        "frames": 10,
+        "ms_per_frame": 6.5,
+        "stretch_max": pytest.approx(1e-4),
+        "penetration_share": pytest.approx(0.055),
+    }
     image = frame_record.read_png_rgb(png)
     assert image.shape == (28 + 5 * 150, 800, 3)
     blue = np.all(image == frame_record._LINE, axis=2)
     # each of the five panels has its curve drawn in it
     for index in range(5):
         top = 28 + index * 150
-        assert blue[top:top + 111].sum() > 200, index
+        assert blue[top : top + 111].sum() > 200, index
     # a rising figure: the curve's left end is lower in the panel (larger row) than its right
-    rows_ms = np.nonzero(blue[28:28 + 111])
+    rows_ms = np.nonzero(blue[28 : 28 + 111])
     left = rows_ms[0][rows_ms[1] < rows_ms[1].min() + 5].mean()
     right = rows_ms[0][rows_ms[1] > rows_ms[1].max() - 5].mean()
     assert left > right + 80
@@ -78,12 +92,18 @@ def test_record_of_a_bake_matches_its_report(open_fixture, tmp_path):
         frame, ms = runner.advance()
         sim = runner.simulation
         penetration = sim.penetration()
-        record.add(frame, {
-            "ms": ms, "stretch": sim.stretch(),
-            "penetration_share": penetration["deeper_num"] / penetration["points_num"]
-            if penetration else 0.0,
-            "kinetic_energy": frame_record.kinetic_energy(sim.velocities),
-            "contacts": getattr(sim.method.solver, "contacts_num", 0)})
+        record.add(
+            frame,
+            {
+                "ms": ms,
+                "stretch": sim.stretch(),
+                "penetration_share": penetration["deeper_num"] / penetration["points_num"]
+                if penetration
+                else 0.0,
+                "kinetic_energy": frame_record.kinetic_energy(sim.velocities),
+                "contacts": getattr(sim.method.solver, "contacts_num", 0),
+            },
+        )
     report = bake.finish_bake(runner)
     png = record.finish()
     assert png.parent == runner.cache.directory and png.is_file()

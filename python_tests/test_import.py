@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from hairdyn import bridge
+from hairdyn import bridge, native
 from hairdyn.hair_formats import HairFileError, read_cem_hair, read_tfx
 from hairdyn.io_import import FIXED_ATTRIBUTE
 
@@ -131,3 +131,49 @@ def test_sintel_hair_sits_on_sintel_bust(empty_scene):
     roots = groom.positions_wo[groom.curve_offsets[:-1]]
     nearest = np.min(np.linalg.norm(vertices[None] - roots[:, None], axis=2), axis=1)
     assert np.median(nearest) < 1.0 and nearest.max() < 2.5
+
+
+def hanging_strands(strands_num=20, points=8, length=0.2):
+    """Strands hanging from roots on a 10 cm patch: a groom about 0.3 m across (metres)."""
+    rng = np.random.default_rng(9)
+    roots = np.c_[rng.uniform(-0.05, 0.05, strands_num), np.zeros(strands_num),
+                  rng.uniform(-0.05, 0.05, strands_num)]
+    t = np.linspace(0.0, 1.0, points)[None, :, None]
+    return (roots[:, None, :] - t * np.array([0.0, length, 0.0])).astype(np.float32)
+
+
+def test_tiny_strands_are_kept_and_zero_length_ones_dropped_with_a_warning(tmp_path, empty_scene):
+    """Real TressFX assets carry strands of a few µm (Ratboy: 7.5 µm; bear at scale 0.01:
+    2 µm): such a strand is simulable when its segments are long against the groom's size (the
+    tolerance is a millionth of it, 0.3 µm here); one whose points coincide is left out, and the
+    import says how many."""
+    positions = hanging_strands()
+    positions[3] = positions[3, :1] + np.linspace(0.0, 7.5e-6, 8)[:, None] * [1.0, 0.0, 0.0]
+    positions[11] = positions[11, :1]  # every point on the root: no direction at all
+    write_tfx4(tmp_path / "groom.tfx", positions)
+    assert bpy.ops.hairdyn.import_tfx(filepath=str(tmp_path / "groom.tfx")) == {'FINISHED'}
+    obj = bpy.context.view_layer.objects.active
+    assert len(obj.data.curves) == 19 and len(obj.data.points) == 19 * 8
+    groom = bridge.read_curves(obj, bpy.context.evaluated_depsgraph_get())
+    native.load().validate_groom(groom.curve_offsets, groom.positions_wo)  # 7.5 µm: accepted
+    from hairdyn.io_import import create_hair_object
+
+    warnings = []
+    create_hair_object(bpy.context, "again", read_tfx(tmp_path / "groom.tfx"), warnings=warnings)
+    assert any(w.startswith("1 strands with a zero-length segment") for w in warnings)
+
+
+def test_implausible_groom_sizes_are_warned_about(tmp_path, empty_scene):
+    from hairdyn.io_import import create_hair_object
+
+    write_tfx4(tmp_path / "groom.tfx", hanging_strands() * 500.0)  # TressFX units: 150 m
+    for scale, expect in ((1.0, "more than hair usually is"), (0.002, None),
+                          (1e-5, "less than hair usually is")):
+        warnings = []
+        create_hair_object(bpy.context, "g", read_tfx(tmp_path / "groom.tfx"), scale=scale,
+                           warnings=warnings)
+        size_notes = [w for w in warnings if "across" in w]
+        if expect is None:
+            assert not size_notes
+        else:
+            assert size_notes and expect in size_notes[0]

@@ -1,6 +1,7 @@
 """LCP's native entry points name the bad point (issue 11 row 8), refuse a frame that needs
 more substeps than allowed with the reason (row 9), and fail a diverged frame with a sentence
 rather than returning NaN (row 4)."""
+
 import numpy as np
 import pytest
 
@@ -28,8 +29,15 @@ def test_explicit_stiff_springs_are_refused_with_the_reason():
     offsets, points = hanging_groom()
     params = n.LcpParams(particle_num=0, implicit_springs=False, young_modulus=1e9)
     particles = n.lcp_particles_from_groom(params, offsets, points)
-    solver = n.LcpSolver(params, particles["positions"], particles["directions"], particles["u"],
-                         particles["v"], particles["s"], np.eye(4, dtype=np.float32))
+    solver = n.LcpSolver(
+        params,
+        particles["positions"],
+        particles["directions"],
+        particles["u"],
+        particles["v"],
+        particles["s"],
+        np.eye(4, dtype=np.float32),
+    )
     count, reason = solver.estimate_substeps(1.0 / 24.0)
     assert count > params.max_substeps and "explicit springs" in reason
     with pytest.raises(ValueError, match="max_substeps"):

@@ -1,6 +1,7 @@
 """The native particle skin (`_native.ParticleSkin`, Bando 2003 §4) on a small groom carried by
 a running LCP solver (it replaced a numpy version, matched to 1e-5 before that was removed),
 and the (u, v, s) binding of a strand to its own particles."""
+
 from types import SimpleNamespace
 
 import numpy as np
@@ -19,8 +20,10 @@ def small_groom():
             wave = 0.004 * np.sin(k * 0.9 + rng.uniform(0, 6)) * np.array([1.0, 0.0, 0.0])
             strands.append(root + k * np.array([0.0, 0.0, -0.01]) + wave)
     positions = np.concatenate(strands) + [0.1, 0.0, 1.5]
-    return SimpleNamespace(curve_offsets=np.arange(0, 100, 10, dtype=np.int32),
-                           positions_wo=np.ascontiguousarray(positions, dtype=np.float32))
+    return SimpleNamespace(
+        curve_offsets=np.arange(0, 100, 10, dtype=np.int32),
+        positions_wo=np.ascontiguousarray(positions, dtype=np.float32),
+    )
 
 
 def test_native_skin_carries_the_groom_on_a_running_solver():
@@ -30,8 +33,15 @@ def test_native_skin_carries_the_groom_on_a_running_solver():
     particles = n.lcp_particles_from_groom(params, groom.curve_offsets, groom.positions_wo)
     head = np.eye(4)
     head[:3, 3] = [0.1, 0.0, 1.4]
-    solver = n.LcpSolver(params, particles["positions"], particles["directions"], particles["u"],
-                         particles["v"], particles["s"], head.astype(np.float32))
+    solver = n.LcpSolver(
+        params,
+        particles["positions"],
+        particles["directions"],
+        particles["u"],
+        particles["v"],
+        particles["s"],
+        head.astype(np.float32),
+    )
     rest_lengths = np.linalg.norm(np.diff(groom.positions_wo.reshape(9, 10, 3), axis=1), axis=2)
     roots_local = groom.positions_wo[::10] - head[:3, 3]
     skin = n.ParticleSkin(groom, solver, head)
@@ -40,8 +50,11 @@ def test_native_skin_carries_the_groom_on_a_running_solver():
     for frame in range(1, 7):  # the head turns and moves; the hair lags behind
         angle = 0.15 * frame
         head = np.eye(4)
-        head[:3, :3] = [[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0],
-                        [0, 0, 1]]
+        head[:3, :3] = [
+            [np.cos(angle), -np.sin(angle), 0],
+            [np.sin(angle), np.cos(angle), 0],
+            [0, 0, 1],
+        ]
         head[:3, 3] = [0.1 + 0.01 * frame, 0.0, 1.4]
         solver.step(1.0 / 24.0, head.astype(np.float32))
         got = skin.apply(solver.positions, head)
@@ -58,15 +71,24 @@ def test_native_skin_binds_a_strand_to_its_own_particles():
     the binding is by (u, v, s) (eq. 3's distance), not by where the particles are."""
     down = np.array([0.0, 0.0, -1.0], np.float32)
     roots = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], np.float32)
-    groom = SimpleNamespace(curve_offsets=np.array([0, 3, 6], np.int32), positions_wo=np.concatenate(
-        [root + np.outer([0.0, 0.1, 0.2], down) for root in roots]).astype(np.float32))
+    groom = SimpleNamespace(
+        curve_offsets=np.array([0, 3, 6], np.int32),
+        positions_wo=np.concatenate(
+            [root + np.outer([0.0, 0.1, 0.2], down) for root in roots]
+        ).astype(np.float32),
+    )
     s = np.array([-0.01, 0.1, 0.2] * 2, np.float32)
-    positions = np.concatenate([roots[0] + np.outer(s[:3], down),
-                                roots[0] + np.outer(s[3:], down) + 0.001]).astype(np.float32)
+    positions = np.concatenate(
+        [roots[0] + np.outer(s[:3], down), roots[0] + np.outer(s[3:], down) + 0.001]
+    ).astype(np.float32)
     positions[3] = roots[1] - 0.01 * down  # B's root particle under B's root
-    solver = SimpleNamespace(positions=positions, s=s,
-                             u=np.array([0.0] * 3 + [1.0] * 3, np.float32),
-                             v=np.zeros(6, np.float32), directions=np.tile(down, (6, 1)))
+    solver = SimpleNamespace(
+        positions=positions,
+        s=s,
+        u=np.array([0.0] * 3 + [1.0] * 3, np.float32),
+        v=np.zeros(6, np.float32),
+        directions=np.tile(down, (6, 1)),
+    )
     head = np.eye(4)
     skin = native.load().ParticleSkin(groom, solver, head, neighbours_num=2)
     assert np.allclose(skin.apply(solver.positions, head), groom.positions_wo, atol=1e-6)
@@ -85,7 +107,9 @@ def test_native_skin_refuses_bad_input_with_a_sentence():
     groom = small_groom()
     params = n.LcpParams(particle_spacing=0.012, particle_num=0, h1=0.016, h2=0.011)
     particles = n.lcp_particles_from_groom(params, groom.curve_offsets, groom.positions_wo)
-    solver = SimpleNamespace(**{k: particles[k] for k in ("positions", "directions", "u", "v", "s")})
+    solver = SimpleNamespace(
+        **{k: particles[k] for k in ("positions", "directions", "u", "v", "s")}
+    )
     with pytest.raises(ValueError, match="singular"):
         n.ParticleSkin(groom, solver, np.zeros((4, 4)))
     skin = n.ParticleSkin(groom, solver, np.eye(4))

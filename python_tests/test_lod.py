@@ -1,5 +1,6 @@
 """Level of detail (Ward & Lin 2003) through the native module: a cap of strands on a head,
 cameras far and close, the report's figures, and bad input refused with a sentence."""
+
 import numpy as np
 import pytest
 
@@ -39,16 +40,28 @@ def view_projection(eye, target=(0.0, 0.0, 0.0), fov=np.radians(60.0), near=0.01
     view[0, :3], view[1, :3], view[2, :3] = right, up, -forward
     view[:3, 3] = -view[:3, :3] @ eye
     f = 1.0 / np.tan(fov / 2.0)
-    projection = np.array([[f, 0, 0, 0], [0, f, 0, 0],
-                           [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)],
-                           [0, 0, -1, 0]])
+    projection = np.array(
+        [
+            [f, 0, 0, 0],
+            [0, f, 0, 0],
+            [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)],
+            [0, 0, -1, 0],
+        ]
+    )
     return projection @ view
 
 
 def make_solver(nm, **lod):
     offsets, positions = cap_groom()
-    params = nm.LodParams(strips_num=6, cluster_min_radius=0.02, distance_near=0.35,
-                          distance_far=1.5, velocity_slow=50.0, velocity_fast=100.0, **lod)
+    params = nm.LodParams(
+        strips_num=6,
+        cluster_min_radius=0.02,
+        distance_near=0.35,
+        distance_far=1.5,
+        velocity_slow=50.0,
+        velocity_fast=100.0,
+        **lod,
+    )
     return nm.LodSolver(offsets, positions, np.eye(4), lod_params=params), offsets, positions
 
 
@@ -56,17 +69,31 @@ def test_params_cite_the_paper_and_refuse_nonsense():
     nm = native.load()
     fields = nm.LodParams.fields()
     names = [f["name"] for f in fields]
-    for name in ("enabled", "strips_num", "distance_near", "distance_far", "velocity_slow",
-                 "velocity_fast", "finest_level", "coarsest_level", "merge_threshold",
-                 "min_group_strands", "transition_time"):
+    for name in (
+        "enabled",
+        "strips_num",
+        "distance_near",
+        "distance_far",
+        "velocity_slow",
+        "velocity_fast",
+        "finest_level",
+        "coarsest_level",
+        "merge_threshold",
+        "min_group_strands",
+        "transition_time",
+    ):
         assert name in names
     assert all("Ward & Lin 2003" in f["description"] for f in fields)
     with pytest.raises(ValueError, match="strips_num"):
         nm.LodParams(strips_num=0)
     offsets, positions = cap_groom()
     with pytest.raises(ValueError, match="distance_near must be smaller than distance_far"):
-        nm.LodSolver(offsets, positions, np.eye(4),
-                     lod_params=nm.LodParams(distance_near=5.0, distance_far=2.0))
+        nm.LodSolver(
+            offsets,
+            positions,
+            np.eye(4),
+            lod_params=nm.LodParams(distance_near=5.0, distance_far=2.0),
+        )
 
 
 def test_far_camera_keeps_the_coarsest_strips_and_a_close_one_refines():
@@ -90,10 +117,12 @@ def test_far_camera_keeps_the_coarsest_strips_and_a_close_one_refines():
     assert solver.lod_level.max() == solver.max_depth
     assert np.isfinite(solver.positions).all()
     # Every strand of the groom is still there, in the groom's layout.
-    lengths = np.linalg.norm(np.diff(solver.positions.reshape(len(offsets) - 1, -1, 3), axis=1),
-                             axis=2).sum(axis=1)
-    rest = np.linalg.norm(np.diff(positions.reshape(len(offsets) - 1, -1, 3), axis=1),
-                          axis=2).sum(axis=1)
+    lengths = np.linalg.norm(
+        np.diff(solver.positions.reshape(len(offsets) - 1, -1, 3), axis=1), axis=2
+    ).sum(axis=1)
+    rest = np.linalg.norm(np.diff(positions.reshape(len(offsets) - 1, -1, 3), axis=1), axis=2).sum(
+        axis=1
+    )
     assert np.abs(lengths / rest - 1.0).max() < 0.2
 
 

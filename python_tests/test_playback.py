@@ -72,7 +72,11 @@ def expect_error(hair, frame, message, capsys):
 def test_a_bake_of_another_groom_is_not_shown(baked, capsys):
     hair, cache = baked
     bpy.context.scene.frame_set(2)
-    other = bpy.data.objects.new("Other", bridge.new_curves_data("Other", np.array([3, 3])))
+    data = bridge.new_curves_data("Other", np.array([3, 3]))
+    data.attributes["position"].data.foreach_set(
+        "vector", np.arange(18, dtype=np.float32) * 0.01
+    )  # two real strands, not Hair's
+    other = bpy.data.objects.new("Other", data)
     bpy.context.scene.collection.objects.link(other)
     other.hairdyn.enabled = True
     other.hairdyn.bake_folder = hair.hairdyn.bake_folder  # points at Hair's bake

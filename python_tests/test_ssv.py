@@ -1,6 +1,7 @@
 """Swept-sphere collision (Ward & Lin 2003 section 5) from Python: the parameter table the
 add-on generates its Collision settings from, the crossings and segment penetration measures,
 the passes, and the errors a caller gets for bad input."""
+
 import math
 
 import numpy as np
@@ -18,19 +19,39 @@ def parallel_strands(gap, count=3, points=5):
     """`count` straight strands along x, `gap` apart along y, 1 cm segments."""
     offsets = np.arange(0, (count + 1) * points, points, dtype=np.int32)
     x = np.linspace(0.0, 0.01 * (points - 1), points, dtype=np.float32)
-    positions = np.concatenate([np.stack([x, np.full_like(x, i * gap), np.zeros_like(x)], axis=1)
-                                for i in range(count)]).astype(np.float32)
+    positions = np.concatenate(
+        [np.stack([x, np.full_like(x, i * gap), np.zeros_like(x)], axis=1) for i in range(count)]
+    ).astype(np.float32)
     return offsets, positions
 
 
 def blade(n, half_thickness=0.001):
     """A 10 cm square box, 2 * half_thickness thick along z, as a ColliderSet."""
     h = np.array([0.05, 0.05, half_thickness], dtype=np.float32)
-    corners = np.array([[(1 if i & 1 else -1), (1 if i & 2 else -1), (1 if i & 4 else -1)]
-                        for i in range(8)], dtype=np.float32) * h
-    triangles = np.array([[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4],
-                          [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]],
-                         dtype=np.int32)
+    corners = (
+        np.array(
+            [[(1 if i & 1 else -1), (1 if i & 2 else -1), (1 if i & 4 else -1)] for i in range(8)],
+            dtype=np.float32,
+        )
+        * h
+    )
+    triangles = np.array(
+        [
+            [0, 2, 3],
+            [0, 3, 1],
+            [4, 5, 7],
+            [4, 7, 6],
+            [0, 1, 5],
+            [0, 5, 4],
+            [2, 6, 7],
+            [2, 7, 3],
+            [0, 4, 6],
+            [0, 6, 2],
+            [1, 3, 7],
+            [1, 7, 5],
+        ],
+        dtype=np.int32,
+    )
     collider = n.Collider(corners, triangles)
     collider.set_transform(np.eye(4))
     return n.ColliderSet([collider])
@@ -38,8 +59,15 @@ def blade(n, half_thickness=0.001):
 
 def test_parameter_table(n):
     fields = {f["name"]: f for f in n.SweptSphereParams.fields()}
-    assert list(fields) == ["hair_hair", "thickness", "near_parallel_angle", "push_strength",
-                            "body_collision", "friction", "distance_threshold"]
+    assert list(fields) == [
+        "hair_hair",
+        "thickness",
+        "near_parallel_angle",
+        "push_strength",
+        "body_collision",
+        "friction",
+        "distance_threshold",
+    ]
     assert fields["hair_hair"]["default"] is False
     assert fields["thickness"]["unit"] == "m" and fields["thickness"]["display_unit"] == "mm"
     assert fields["thickness"]["display_scale"] == pytest.approx(1e3)
@@ -86,8 +114,13 @@ def test_passes_carry_their_parameters_and_statistics(n):
     assert hair_hair.params.hair_hair is True
     hair_hair.params = n.SweptSphereParams(thickness=0.002)
     assert hair_hair.params.thickness == pytest.approx(0.002)
-    assert hair_hair.stats == {"pairs_num": 0, "pushed_num": 0, "averaged_num": 0,
-                               "candidates_num": 0, "ms": 0.0}
+    assert hair_hair.stats == {
+        "pairs_num": 0,
+        "pushed_num": 0,
+        "averaged_num": 0,
+        "candidates_num": 0,
+        "ms": 0.0,
+    }
     body = n.SsvObjectPass(colliders, n.SweptSphereParams(body_collision=1))
     assert body.params.body_collision == 1
     assert set(body.stats) == {"pushed_num", "near_num", "unresolved_num", "ms"}

@@ -3,6 +3,7 @@ vertical axis over frames 1-12, then held to frame 24) with the swept-sphere bod
 (Ward & Lin 2003 section 5.4), natively: the share of segment-frames that cut the bust (a point
 of the segment deeper than 1% of the bust's size, the report's tolerance) stays at or below
 0.1%. Everything stays in the files' Y-up axes, scaled by 0.015 as the import does."""
+
 import math
 
 import numpy as np
@@ -26,8 +27,12 @@ def read_obj(path):
                 vertices.append([float(v) for v in parts[1:4]])
             elif parts[0] == "f":
                 corners = [int(p.split("/")[0]) - 1 for p in parts[1:]]
-                triangles += [[corners[0], corners[k - 1], corners[k]] for k in range(2, len(corners))]
-    return np.array(vertices, dtype=np.float32) * np.float32(SCALE), np.array(triangles, dtype=np.int32)
+                triangles += [
+                    [corners[0], corners[k - 1], corners[k]] for k in range(2, len(corners))
+                ]
+    return np.array(vertices, dtype=np.float32) * np.float32(SCALE), np.array(
+        triangles, dtype=np.int32
+    )
 
 
 def turn(frame):
@@ -64,8 +69,9 @@ def segment_share(mode):
     for frame in range(2, 25):
         bust.set_transform(turn(frame))
         solver.step(1.0 / 24.0, turn(frame))
-        shares.append(n.segment_penetration_share(offsets, np.asarray(solver.positions), colliders,
-                                                  tolerance))
+        shares.append(
+            n.segment_penetration_share(offsets, np.asarray(solver.positions), colliders, tolerance)
+        )
     return float(np.mean(shares)), body.stats
 
 

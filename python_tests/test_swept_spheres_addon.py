@@ -1,5 +1,6 @@
 """Swept spheres (Ward & Lin 2003 §5) in the add-on: the Strands method's hair-hair and
 segment-exact body collision passes, set from the panel's group or --set, and their report."""
+
 import bpy
 
 from hairdyn import cli, simulation
@@ -9,10 +10,19 @@ def test_hair_hair_and_swept_sphere_body_collision_report(open_fixture):
     open_fixture("head_shake.blend")
     hair = bpy.data.objects["Hair"]
     settings = hair.hairdyn
-    cli.apply_settings(settings, ["method=strands", "hair_hair=true",
-                                  "body_collision=swept_spheres",
-                                  "strands.children_per_guide=0"])
-    assert settings.swept_spheres.hair_hair and settings.swept_spheres.body_collision == 'SWEPT_SPHERES'
+    cli.apply_settings(
+        settings,
+        [
+            "method=strands",
+            "hair_hair=true",
+            "body_collision=swept_spheres",
+            "strands.children_per_guide=0",
+        ],
+    )
+    assert (
+        settings.swept_spheres.hair_hair
+        and settings.swept_spheres.body_collision == 'SWEPT_SPHERES'
+    )
     report = simulation.run(bpy.context, hair, 1, 4)
     assert report["nan_frames"] == 0 and report["stretch_max"] < 1e-4
     assert report["hair_hair_ms"] > 0.0 and report["hair_hair_pairs"] >= 0

@@ -1,6 +1,7 @@
 """Volumetric hair (Petrovic, Henne & Anderson 2006) through the Python API: parameters, the
 density grid against a numpy reference of eq. 1, the substep pass on numpy buffers, the hair
 shell and its transported normals, the checks at the boundary, and the OpenVDB file."""
+
 import bpy
 import numpy as np
 import pytest
@@ -63,8 +64,9 @@ def test_density_grid_matches_numpy_reference():
     offsets, positions = wavy_groom(strands=12, points=8)
     head = np.eye(4)
     head[:3, 3] = [0.3, -0.2, 1.1]
-    density, grid_to_world = _native.density_grid(offsets, positions + head[:3, 3].astype(np.float32),
-                                                  head, cell_size=0.02)
+    density, grid_to_world = _native.density_grid(
+        offsets, positions + head[:3, 3].astype(np.float32), head, cell_size=0.02
+    )
     world_to_grid = np.linalg.inv(grid_to_world)
     shifted = positions + head[:3, 3]
     grid_points = (np.c_[shifted, np.ones(len(shifted))] @ world_to_grid.T)[:, :3]
@@ -85,11 +87,11 @@ def test_pass_keeps_a_uniform_field_and_never_adds_energy():
     rng = np.random.default_rng(3)
     velocities = rng.normal(size=positions.shape).astype(np.float32)
     velocities[offsets[:-1]] = 0.0  # roots are carried by the head, not by the pass
-    before = (velocities ** 2).sum()
+    before = (velocities**2).sum()
     roots = positions[offsets[:-1]].copy()
     moved = positions.copy()
     volume.apply(offsets, moved, velocities, 0.01)
-    assert (velocities ** 2).sum() < before
+    assert (velocities**2).sum() < before
     np.testing.assert_array_equal(moved[offsets[:-1]], roots)
 
 
@@ -98,8 +100,9 @@ def test_targeting_lowers_the_error_of_eq3():
     with damping, toward a shifted copy: eq. 3's error falls."""
     offsets, positions = wavy_groom(strands=60, points=6, seed=4)
     target = positions + np.float32([0.02, 0.0, 0.0])
-    volume = _native.VolumePass(_native.VolumeParams(smoothing=0.0, cell_size=0.015,
-                                                     target_strength=5.0, target_levels=2))
+    volume = _native.VolumePass(
+        _native.VolumeParams(smoothing=0.0, cell_size=0.015, target_strength=5.0, target_levels=2)
+    )
     volume.set_target(offsets, target)
     velocities = np.zeros_like(positions)
     errors = []
@@ -122,13 +125,17 @@ def test_shell_normals_are_radial_and_follow_rigid_motion():
     cosines = (shell.rest_normals[surface] * radial[surface]).sum(axis=1) / distance[surface]
     assert np.degrees(np.arccos(np.clip(cosines, -1, 1))).max() < 5.0
     assert shell.signed_distance.min() < 0 < shell.signed_distance.max()
-    np.testing.assert_allclose(_native.shell_normals(offsets, positions, None, params),
-                               shell.rest_normals)
+    np.testing.assert_allclose(
+        _native.shell_normals(offsets, positions, None, params), shell.rest_normals
+    )
 
     angle = 0.8
     motion = np.eye(4)
-    motion[:3, :3] = [[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0],
-                      [0, 0, 1]]
+    motion[:3, :3] = [
+        [np.cos(angle), -np.sin(angle), 0],
+        [np.sin(angle), np.cos(angle), 0],
+        [0, 0, 1],
+    ]
     motion[:3, 3] = [0.1, 0.2, -0.3]
     moved = (positions @ motion[:3, :3].T + motion[:3, 3]).astype(np.float32)
     normals = shell.transport(moved, motion)
@@ -171,8 +178,9 @@ def test_density_grid_as_openvdb(tmp_path):
     grid = writer.read(path, "density")
     ijk = tuple(int(i) for i in np.unravel_index(np.argmax(density), density.shape))
     assert grid.getConstAccessor().getValue(ijk) == pytest.approx(float(density[ijk]))
-    np.testing.assert_allclose(grid.transform.indexToWorld(ijk), (grid_to_world @ [*ijk, 1])[:3],
-                               atol=1e-6)
+    np.testing.assert_allclose(
+        grid.transform.indexToWorld(ijk), (grid_to_world @ [*ijk, 1])[:3], atol=1e-6
+    )
     volume = bpy.data.volumes.new("density")
     volume.filepath = path
     volume.grids.load()

@@ -2,6 +2,7 @@
 through the Strands method, its report fields, the shell_normal attribute in outputs and
 cache, and the Cycles pictures of Sintel's groom shaded by the shell against the default hair
 shader (Fig. 3(b) against 3(c)), kept as files."""
+
 import bpy
 import numpy as np
 from mathutils import Vector
@@ -62,8 +63,10 @@ def test_sintel_shell_normals_against_the_default_hair_shader(artifacts):
     default = bpy.data.materials.new("default_hair")
     default.use_nodes = True
     images = {}
-    for name, material in (("shell_normals", bpy.data.materials["hairdyn_shell_normals"]),
-                           ("default_hair", default)):
+    for name, material in (
+        ("shell_normals", bpy.data.materials["hairdyn_shell_normals"]),
+        ("default_hair", default),
+    ):
         output.data.materials.clear()
         output.data.materials.append(material)
         path = artifacts / f"sintel_{name}_{bpy.app.version_string.split()[0]}.png"

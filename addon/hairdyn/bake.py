@@ -72,15 +72,7 @@ def start_bake(context, hair_obj, resume_after=None):
                 "The parameters changed since this bake started: bake from the "
                 "start, or restore them"
             )
-        last = cache.last_contiguous_frame()
-        if last is None or last < cache.manifest["frame_start"]:
-            raise HairdynError(f"There is no baked frame to continue from in '{directory}'")
-        last = min(last, resume_after)
-        if last >= cache.manifest["frame_end"]:
-            raise HairdynError(f"The bake in '{directory}' is already complete")
-        for frame in cache.frames():
-            if frame > last:
-                cache.frame_path(frame).unlink()
+        last = cache.prepare_resume(resume_after)
         return Runner(
             context,
             hair_obj,
@@ -106,6 +98,7 @@ def start_bake(context, hair_obj, resume_after=None):
             "object": hair_obj.name,
             "outputs": {name: stream.output() for name, stream in streams.items()},
         },
+        rest_positions=runner.simulation.groom.positions_wo,
     )
     return runner
 

@@ -4,7 +4,8 @@ Everything goes through foreach_get / foreach_set on numpy arrays: no per-point 
 Arrays handed to the native module are C-contiguous (N, 3) float32 / int32, so they cross
 the boundary without copies.
 """
-from dataclasses import dataclass
+import sys
+from dataclasses import dataclass, field
 
 import bpy
 import numpy as np
@@ -23,6 +24,7 @@ class Groom:
     curve_offsets: np.ndarray  # (C + 1,) int32
     surface: object  # bpy.types.Object the roots sit on, or None
     root_uvs: object  # (C, 2) float32 surface UVs of the roots, or None
+    warnings: list = field(default_factory=list)  # sentences for the report / console
 
     @property
     def curves_num(self):
@@ -182,15 +184,63 @@ def read_particle_hair(obj, depsgraph):
 
 
 def read_groom(obj, depsgraph):
-    """The strands of any hair object, world space."""
+    """The strands of any hair object, world space, without its degenerate strands (see
+    drop_degenerate_strands)."""
     if obj is None:
         raise HairdynError("No hair object given")
     if obj.type == 'CURVES':
-        return read_curves(obj, depsgraph)
-    if hair_particle_system(obj) is not None:
-        return read_particle_hair(obj, depsgraph)
-    raise HairdynError(f"'{obj.name}' is not hair: use a Curves object or a mesh with a hair "
-                       "particle system")
+        groom = read_curves(obj, depsgraph)
+    elif hair_particle_system(obj) is not None:
+        groom = read_particle_hair(obj, depsgraph)
+    else:
+        raise HairdynError(f"'{obj.name}' is not hair: use a Curves object or a mesh with a "
+                           "hair particle system")
+    return drop_degenerate_strands(groom, obj.name)
+
+
+def degenerate_strand_mask(curve_offsets, positions):
+    """(C,) bool: strands with a segment shorter than a millionth of the groom's size (the
+    native tolerance, relative so that units do not matter), or None when the groom is
+    broken in another way (the solvers' own check then names the problem)."""
+    from . import native
+
+    module = native.load()
+    try:
+        return module.degenerate_strands(np.ascontiguousarray(curve_offsets, dtype=np.int32),
+                                         np.ascontiguousarray(positions, dtype=np.float32))
+    except ValueError:
+        return None
+
+
+def keep_strands(curve_offsets, keep):
+    """(new curve offsets, point mask) keeping the strands where keep is True."""
+    sizes = np.diff(curve_offsets)[keep]
+    offsets = np.zeros(len(sizes) + 1, dtype=np.int32)
+    np.cumsum(sizes, out=offsets[1:])
+    return offsets, np.repeat(keep, np.diff(curve_offsets))
+
+
+def drop_degenerate_strands(groom, name):
+    """The groom without strands too short to have a direction (real assets carry a few:
+    TressFX strands of 2 µm); the count goes to groom.warnings and the console."""
+    degenerate = degenerate_strand_mask(groom.curve_offsets, groom.positions_wo)
+    if degenerate is None or not degenerate.any():
+        return groom
+    count = int(degenerate.sum())
+    if count == len(degenerate):
+        raise HairdynError(f"Every strand of '{name}' ({count}) has a zero-length segment "
+                           "(shorter than a millionth of the groom's size)")
+    offsets, points = keep_strands(groom.curve_offsets, ~degenerate)
+    message = (f"{count} of the {len(degenerate)} strands of '{name}' have a zero-length "
+               "segment (shorter than a millionth of the groom's size) and were left out")
+    print(f"hairdyn: warning: {message}", file=sys.stderr)
+    return Groom(
+        positions_wo=np.ascontiguousarray(groom.positions_wo[points]),
+        curve_offsets=offsets,
+        surface=groom.surface,
+        root_uvs=None if groom.root_uvs is None else np.ascontiguousarray(groom.root_uvs[~degenerate]),
+        warnings=groom.warnings + [message],
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -215,6 +265,9 @@ def read_mesh(obj, depsgraph):
         mesh.loop_triangles.foreach_get("polygon_index", triangle_faces)
     finally:
         evaluated.to_mesh_clear()
+    if len(vertices) == 0:
+        raise HairdynError(f"The mesh '{obj.name}' has no vertices: a head or collider needs "
+                           "a mesh with faces")
     return MeshData(obj.name, vertices, normals, triangles, triangle_faces,
                     matrix_array(evaluated.matrix_world))
 

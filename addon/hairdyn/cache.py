@@ -15,6 +15,12 @@ Every file appears only complete: it is written to a temporary file, flushed to 
 renamed. A frame's stream files are written before its frame file, so the frame files present
 are the frames baked, whole. A frame with a value that is not finite is refused before
 anything is written.
+
+Nothing read back is trusted: the manifest's counts and column spans are checked when it is
+opened, and every table read is checked for its dtype, shape and finite values before it is
+handed out (CacheError naming the file otherwise). A resumed bake checks the frames it keeps
+(prepare_resume) and refuses a groom whose rest positions moved since the bake started (the
+manifest keeps a hash of them).
 """
 import hashlib
 import json
@@ -36,10 +42,26 @@ class CacheError(HairdynError):
     pass
 
 
+_INT32_MAX = 2**31 - 1
+
+
 def topology_hash(curve_offsets):
     """Identifies a groom's topology: the curve offsets (and so the point count)."""
     offsets = np.ascontiguousarray(curve_offsets, dtype=np.int32)
     return hashlib.sha256(offsets.tobytes()).hexdigest()[:16]
+
+
+def rest_hash(positions):
+    """Identifies a groom's rest shape: the exact bits of its (N, 3) float32 positions."""
+    values = np.ascontiguousarray(positions, dtype=np.float32)
+    return hashlib.sha256(values.tobytes()).hexdigest()[:16]
+
+
+def _count(value, what, limit=_INT32_MAX):
+    """An int 0 <= value <= limit from a manifest, or ValueError naming it."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= limit:
+        raise ValueError(f"{what} is {value!r}, not a count between 0 and {limit}")
+    return value
 
 
 def _write_atomic(path, write):
@@ -70,9 +92,22 @@ class _Layout:
 
     def __init__(self, prefix, points_num, spans):
         self.prefix = prefix
-        self.points_num = points_num
-        self.columns = {name: tuple(span) for name, span in spans.items()}
+        self.points_num = _count(points_num, f"the {prefix} point count")
+        if not isinstance(spans, dict) or not spans:
+            raise ValueError(f"the {prefix} columns are {spans!r}")
+        self.columns = {}
+        for name, span in spans.items():
+            if not isinstance(span, (list, tuple)) or len(span) != 2:
+                raise ValueError(f"the {prefix} column '{name}' spans {span!r}")
+            start = _count(span[0], f"the start of column '{name}'", 4096)
+            stop = _count(span[1], f"the end of column '{name}'", 4096)
+            if stop <= start:
+                raise ValueError(f"the {prefix} column '{name}' spans {span!r}")
+            self.columns[name] = (start, stop)
         self.width = max(stop for _, stop in self.columns.values())
+        if self.points_num * self.width > _INT32_MAX:
+            raise ValueError(f"{self.points_num} {prefix} points of {self.width} values are "
+                             "more than a cache frame can hold")
 
     def pack(self, frame, arrays):
         table = np.empty((self.points_num, self.width), dtype=np.float32)
@@ -94,9 +129,18 @@ class _Layout:
         return table
 
     def unpack(self, path, table):
+        """The named columns of a table read from `path`, after checking its dtype, shape and
+        values: CacheError naming the file otherwise."""
         if table.dtype != np.float32 or table.shape != (self.points_num, self.width):
             raise CacheError(f"The cache frame '{path}' holds {table.dtype} {table.shape}, the "
                              f"manifest says float32 ({self.points_num}, {self.width})")
+        finite = np.isfinite(table)
+        if not finite.all():
+            bad = sorted(name for name, (start, stop) in self.columns.items()
+                         if not finite[:, start:stop].all())
+            point = int(np.flatnonzero(~finite.all(axis=1))[0])
+            raise CacheError(f"The cache frame '{path}' has values that are not finite numbers "
+                             f"in {', '.join(bad)} (point {point}): bake again")
         return {name: (table[:, start] if stop - start == 1 else table[:, start:stop])
                 for name, (start, stop) in self.columns.items()}
 
@@ -108,8 +152,12 @@ class Cache:
         self.directory = Path(directory)
         self.manifest = manifest
         self.main = _Layout(MAIN, manifest["topology"]["points"], manifest["columns"])
+        _count(manifest["topology"]["curves"], "the strand count")
         self.streams = {name: _Layout(name, stream["points"], stream["columns"])
                         for name, stream in manifest.get("streams", {}).items()}
+        for key in ("frame_start", "frame_end"):
+            if isinstance(manifest[key], bool) or not isinstance(manifest[key], int):
+                raise ValueError(f"{key} is {manifest[key]!r}")
 
     @property
     def columns(self):
@@ -123,9 +171,11 @@ class Cache:
 
     @classmethod
     def create(cls, directory, *, solver, parameters, curve_offsets, columns, frame_start,
-               frame_end, fps, streams=None, extra=None):
+               frame_end, fps, streams=None, extra=None, rest_positions=None):
         """A new cache (an older bake in `directory` is removed). streams: name ->
-        {"points": M, "columns": {name: width}, "offsets": (K + 1,) int32 or None}."""
+        {"points": M, "columns": {name: width}, "offsets": (K + 1,) int32 or None};
+        rest_positions: the groom's (N, 3) positions the bake starts from (a resume checks
+        them)."""
         directory = Path(directory)
         try:
             directory.mkdir(parents=True, exist_ok=True)
@@ -141,7 +191,9 @@ class Cache:
             "solver": solver,
             "parameters": parameters,
             "topology": {"curves": int(len(curve_offsets) - 1), "points": int(curve_offsets[-1]),
-                         "hash": topology_hash(curve_offsets)},
+                         "hash": topology_hash(curve_offsets),
+                         **({"rest_hash": rest_hash(rest_positions)}
+                            if rest_positions is not None else {})},
             "columns": _spans(columns),
             "streams": {name: {"points": int(stream["points"]),
                                "columns": _spans(stream["columns"]),
@@ -179,8 +231,9 @@ class Cache:
                              f"this hairdyn reads version {VERSION}: bake again")
         try:
             return cls(directory, manifest)
-        except (KeyError, TypeError, ValueError) as error:
-            raise CacheError(f"The cache manifest '{path}' is incomplete ({error})") from None
+        except (KeyError, TypeError, ValueError, AttributeError) as error:
+            raise CacheError(f"The cache manifest '{path}' is incomplete or damaged "
+                             f"({error})") from None
 
     def free(self):
         """Removes every file of this cache (frames, streams, topology, manifest)."""
@@ -195,17 +248,27 @@ class Cache:
         _write_atomic(self.directory / name, lambda file: np.save(file, values))
 
     def _load(self, path, what):
+        """One array from a .npy file: CacheError naming the file when it is missing, a
+        directory, not a plain .npy array, corrupted or truncated."""
+        if path.is_dir():
+            raise CacheError(f"The cache {what} '{path}' is a directory, not a file")
         try:
-            return np.load(path, allow_pickle=False)
+            array = np.load(path, allow_pickle=False)
         except FileNotFoundError:
             raise CacheError(f"The cache {what} '{path}' is missing") from None
-        except (OSError, ValueError, EOFError) as error:
+        except (OSError, ValueError, EOFError, KeyError) as error:
             raise CacheError(f"The cache {what} '{path}' is corrupted or truncated ({error})") from None
+        if not isinstance(array, np.ndarray):  # an .npz archive under a .npy name
+            if hasattr(array, "close"):
+                array.close()
+            raise CacheError(f"The cache {what} '{path}' is not a single array")
+        return array
 
     def curve_offsets(self):
         path = self.directory / "curve_offsets.npy"
         offsets = self._load(path, "topology")
-        if offsets.dtype != np.int32 or topology_hash(offsets) != self.manifest["topology"]["hash"]:
+        if offsets.dtype != np.int32 or offsets.ndim != 1 or \
+                topology_hash(offsets) != self.manifest["topology"]["hash"]:
             raise CacheError(f"The cache topology '{path}' does not match its manifest")
         return offsets
 
@@ -213,33 +276,117 @@ class Cache:
         """The curve offsets of a stream of curves (e.g. "children")."""
         path = self.directory / f"{name}_offsets.npy"
         offsets = self._load(path, f"{name} topology")
-        if offsets.dtype != np.int32 or offsets.ndim != 1 or \
-                offsets[-1] != self.streams[name].points_num:
+        if offsets.dtype != np.int32 or offsets.ndim != 1 or len(offsets) < 2 or \
+                offsets[0] != 0 or offsets[-1] != self.streams[name].points_num or \
+                (np.diff(offsets) < 0).any():
             raise CacheError(f"The cache {name} topology '{path}' does not match its manifest")
         return offsets
 
     def last_contiguous_frame(self):
-        """The last frame of the unbroken run of frames from frame_start, or None."""
+        """The last frame of the unbroken run of frames from frame_start, or None. A frame
+        counts when its file is a .npy table of the manifest's dtype and shape (its values are
+        checked by read_frame and frame_problem)."""
         present = set(self.frames())
         frame = self.manifest["frame_start"]
-        if frame not in present:
+        if frame not in present or not self._frame_file_ok(frame):
             return None
-        while frame + 1 in present and frame + 1 <= self.manifest["frame_end"]:
+        while frame + 1 in present and frame + 1 <= self.manifest["frame_end"] and \
+                self._frame_file_ok(frame + 1):
             frame += 1
         return frame
+
+    def _frame_file_ok(self, frame):
+        """Whether the frame's files hold tables of the manifest's dtype and shape (headers
+        and file sizes only; the values are not read)."""
+        layouts = [(self.frame_path(frame), self.main)]
+        layouts += [(self.path(name, frame), layout) for name, layout in self.streams.items()]
+        for path, layout in layouts:
+            try:
+                with open(path, "rb") as file:
+                    read_header = {(1, 0): np.lib.format.read_array_header_1_0,
+                                   (2, 0): np.lib.format.read_array_header_2_0}.get(
+                                       np.lib.format.read_magic(file))
+                    if read_header is None:
+                        return False
+                    shape, fortran, dtype = read_header(file)
+                    header_end = file.tell()
+                size = path.stat().st_size
+            except (OSError, ValueError, EOFError):
+                return False
+            expected = (layout.points_num, layout.width)
+            if dtype != np.float32 or fortran or tuple(shape) != expected or \
+                    size != header_end + 4 * layout.points_num * layout.width:
+                return False
+        return True
+
+    def frame_problem(self, frame):
+        """None when the frame and its streams read back whole (dtype, shape, finite values),
+        otherwise the sentence read_frame would raise."""
+        try:
+            self.read_frame(frame)
+            for name in self.streams:
+                self.read_stream(name, frame)
+        except CacheError as error:
+            return str(error)
+        return None
+
+    def prepare_resume(self, resume_after):
+        """Checks the frames a resumed bake keeps and removes the others; returns the last
+        frame kept. Frames are kept from frame_start up to resume_after while each reads back
+        whole; the first missing, truncated, garbled or non-finite frame and everything after
+        it are baked again (a directory in the way is refused: it is not ours to remove). The
+        manifest says the bake is incomplete until finish."""
+        start, end = self.manifest["frame_start"], self.manifest["frame_end"]
+        last = None
+        for frame in range(start, min(end, resume_after) + 1):
+            if self.frame_problem(frame) is not None:
+                break
+            last = frame
+        if last is None:
+            problem = self.frame_problem(start)
+            raise CacheError(f"There is no baked frame to continue from in '{self.directory}' "
+                             f"({problem})")
+        if last >= end:
+            raise CacheError(f"The bake in '{self.directory}' is already complete")
+        self.manifest["complete"] = False
+        self.save_manifest()
+        self.discard_frames_after(last)
+        return last
+
+    def discard_frames_after(self, last):
+        """Removes the frame and stream files of the frames after `last`."""
+        prefixes = [MAIN, *self.streams]
+        doomed = [self.path(prefix, frame) for frame in self.frames() if frame > last
+                  for prefix in prefixes]
+        for path in doomed:
+            if path.is_dir():
+                raise CacheError(f"'{path}' is a directory where the cache keeps a frame: "
+                                 "remove it, then bake again")
+        for path in doomed:
+            try:
+                path.unlink(missing_ok=True)
+            except OSError as error:
+                raise CacheError(f"Cannot remove the cache file '{path}': "
+                                 f"{error.strerror or error}") from None
 
     def save_manifest(self):
         text = json.dumps(self.manifest, indent=2, sort_keys=True).encode()
         _write_atomic(self.manifest_path(self.directory), lambda file: file.write(text))
 
-    def check_topology(self, curve_offsets):
-        """CacheError unless the cache was baked from a groom of this topology."""
+    def check_topology(self, curve_offsets, rest_positions=None):
+        """CacheError unless the cache was baked from a groom of this topology (and, given
+        rest_positions and a manifest that recorded them, from this rest shape)."""
         expected = self.manifest["topology"]
         if expected["hash"] != topology_hash(curve_offsets):
             raise CacheError(
                 f"The cache in '{self.directory}' was baked from another groom "
                 f"({expected['curves']} strands, {expected['points']} points; this one has "
                 f"{len(curve_offsets) - 1} strands, {int(curve_offsets[-1])} points): bake again")
+        if rest_positions is not None and "rest_hash" in expected and \
+                expected["rest_hash"] != rest_hash(rest_positions):
+            raise CacheError(
+                f"The groom's points moved since the bake in '{self.directory}' started (same "
+                "strands, another rest shape): bake from the start")
 
     # -- frames --------------------------------------------------------------------------------
 
@@ -272,7 +419,7 @@ class Cache:
     def read_frame(self, frame):
         """name -> array for one frame, or CacheError naming the file."""
         path = self.frame_path(frame)
-        if not path.is_file():
+        if not path.exists():
             raise CacheError(f"Frame {frame} is not in the cache ('{path}' is missing)")
         return self.main.unpack(path, self._load(path, "frame"))
 

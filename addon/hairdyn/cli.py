@@ -224,57 +224,60 @@ def _export(args, obj):
     """cli.py export: the bake in --cache (or the object's) to --file."""
     import bpy
     from hairdyn import export
-    from hairdyn.errors import HairdynError
 
     if args.cache:
         obj.hairdyn.cache_directory = str(Path(args.cache).resolve())
-    try:
-        result = export.export_bake(bpy.context, obj, args.file)
-    except HairdynError as error:
-        print(f"hairdyn: error: {error}", file=sys.stderr)
-        return RUN_ERROR
+    result = export.export_bake(bpy.context, obj, args.file)
     print(json.dumps(result, indent=2))
     return 0
 
 
 def main(argv):
+    """Runs the command line; returns the exit code. Every failure, whatever raised it, is one
+    line on stderr and exit code 1 (2 for a bad command line): under the blender binary an
+    exception escaping this function would still end the process with exit code 0."""
     try:
         args = _arguments(argv)
     except SystemExit as exit_:
         return USAGE_ERROR if exit_.code else 0
     if args.command == "wedge":
         return _wedge().main(args)
-    import bpy
-
-    hairdyn = _ensure_addon()
-    from hairdyn import errors, simulation
-
     try:
-        if args.blend:
-            if not Path(args.blend).is_file():
-                raise UsageError(f"there is no .blend file at '{args.blend}'")
-            bpy.ops.wm.open_mainfile(filepath=str(Path(args.blend).resolve()))
-        obj = bpy.data.objects.get(args.object)
-        if obj is None:
-            hair = [o.name for o in bpy.data.objects if hairdyn.bridge.is_hair_object(o)]
-            raise UsageError(f"there is no object named '{args.object}'; hair objects: "
-                             f"{', '.join(hair) or 'none'}")
-        apply_settings(obj.hairdyn, args.set)
-        start, end = args.frames or (obj.hairdyn.frame_start, obj.hairdyn.frame_end)
+        return _main(args)
     except UsageError as error:
         print(f"hairdyn: error: {error}", file=sys.stderr)
         return USAGE_ERROR
-
-    if args.command == "export":
-        return _export(args, obj)
-    try:
-        report = _bake(args, obj, start, end) if args.command == "bake" else \
-            simulation.run(bpy.context, obj, start, end, on_frame=_progress)
     except Exception as error:  # noqa: BLE001 - the add-on's error boundary (errors.py)
+        from hairdyn import errors
+
         if errors.is_internal(error):
             errors.print_traceback(error)
         print(f"hairdyn: error: {errors.message(error)}", file=sys.stderr)
         return RUN_ERROR
+
+
+def _main(args):
+    import bpy
+
+    hairdyn = _ensure_addon()
+    from hairdyn import simulation
+
+    if args.blend:
+        if not Path(args.blend).is_file():
+            raise UsageError(f"there is no .blend file at '{args.blend}'")
+        bpy.ops.wm.open_mainfile(filepath=str(Path(args.blend).resolve()))
+    obj = bpy.data.objects.get(args.object)
+    if obj is None:
+        hair = [o.name for o in bpy.data.objects if hairdyn.bridge.is_hair_object(o)]
+        raise UsageError(f"there is no object named '{args.object}'; hair objects: "
+                         f"{', '.join(hair) or 'none'}")
+    apply_settings(obj.hairdyn, args.set)
+    start, end = args.frames or (obj.hairdyn.frame_start, obj.hairdyn.frame_end)
+
+    if args.command == "export":
+        return _export(args, obj)
+    report = _bake(args, obj, start, end) if args.command == "bake" else \
+        simulation.run(bpy.context, obj, start, end, on_frame=_progress)
     text = json.dumps(report, indent=2)
     if args.report:
         Path(args.report).write_text(text + "\n")

@@ -125,9 +125,13 @@ class Colliders:
             collider.set_transform(mesh.matrix_world)
         return rebuild_ms
 
-    def penetration(self, positions_wo):
-        """Exact penetration of points against the real triangles (not the maps)."""
-        return self.set.penetration_stats(positions_wo, tolerance=self.tolerance_wo())
+    def penetration(self, positions_wo, curve_offsets=None):
+        """Exact penetration of points against the real triangles (not the maps); with the
+        strands' curve_offsets their roots are counted apart (roots_inside: a groom grown
+        inside the body, which no solver can fix)."""
+        return self.set.penetration_stats(
+            positions_wo, tolerance=self.tolerance_wo(), curve_offsets=curve_offsets
+        )
 
     def tolerance_wo(self):
         return self.params.penetration_tolerance * self.set.size_wo

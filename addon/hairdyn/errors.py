@@ -17,6 +17,10 @@ def message(error):
     """The one line a user sees for any exception."""
     if isinstance(error, HairdynError):
         return str(error)
+    if isinstance(error, OSError) and error.filename is not None:  # the disk, not a bug
+        return f"Cannot access '{error.filename}': {error.strerror or error}"
+    if isinstance(error, MemoryError):
+        return "Out of memory: bake fewer strands or frames at once"
     return (
         f"Internal error in hairdyn ({type(error).__name__}: {error}); the traceback is on "
         "the console, please report it"
@@ -24,7 +28,8 @@ def message(error):
 
 
 def is_internal(error):
-    return not isinstance(error, HairdynError)
+    """A bug of hairdyn's (its traceback is printed), not something the user can fix."""
+    return not isinstance(error, (HairdynError, OSError, MemoryError))
 
 
 def print_traceback(error, where="hairdyn"):

@@ -8,6 +8,7 @@ version). During the export the scene's frame range is the bake's, the baked fra
 through the playback handler, and a pass-through Geometry Nodes modifier marks the outputs as
 changing over time (the exporters write one sample for geometry they deem static).
 """
+
 import contextlib
 from pathlib import Path
 
@@ -17,10 +18,12 @@ import numpy as np
 from .errors import HairdynError
 
 # file suffix -> (kind, exporter, importer)
-FORMATS = {".abc": ("Alembic", "alembic_export", "alembic_import"),
-           ".usd": ("USD", "usd_export", "usd_import"),
-           ".usda": ("USD", "usd_export", "usd_import"),
-           ".usdc": ("USD", "usd_export", "usd_import")}
+FORMATS = {
+    ".abc": ("Alembic", "alembic_export", "alembic_import"),
+    ".usd": ("USD", "usd_export", "usd_import"),
+    ".usda": ("USD", "usd_export", "usd_import"),
+    ".usdc": ("USD", "usd_export", "usd_import"),
+}
 _NODE_GROUP = "hairdyn export (pass-through)"
 
 
@@ -36,7 +39,7 @@ def has_operator(name):
 def missing(suffix):
     """None when this Blender can export `suffix` (".abc", ".usd", ...), else why not."""
     if suffix not in FORMATS:
-        return (f"hairdyn exports to {', '.join(sorted(FORMATS))}, not '{suffix}'")
+        return f"hairdyn exports to {', '.join(sorted(FORMATS))}, not '{suffix}'"
     kind, exporter, _ = FORMATS[suffix]
     if not has_operator(exporter):
         return f"This Blender ({bpy.app.version_string}) is built without the {kind} exporter"
@@ -69,8 +72,13 @@ def _pass_through_group():
 def _exporting(scene, objects, frame_start, frame_end):
     """The scene set up for an export of `objects` over the frame range, restored after."""
     view_layer = bpy.context.view_layer
-    saved = (scene.frame_start, scene.frame_end, scene.frame_current, view_layer.objects.active,
-             [o for o in view_layer.objects if o.select_get()])
+    saved = (
+        scene.frame_start,
+        scene.frame_end,
+        scene.frame_current,
+        view_layer.objects.active,
+        [o for o in view_layer.objects if o.select_get()],
+    )
     group = _pass_through_group()
     modifiers = []
     try:
@@ -106,9 +114,11 @@ def _attribute_writer(curves_obj, cache):
         if not cache.has_frame(frame):
             return
         arrays = cache.read_frame(frame)
-        bridge.write_point_attributes(curves_obj.data, {name: values for name, values in
-                                                        arrays.items() if name != "position"})
+        bridge.write_point_attributes(
+            curves_obj.data, {name: values for name, values in arrays.items() if name != "position"}
+        )
         curves_obj.data.update_tag()
+
     return write
 
 
@@ -145,19 +155,26 @@ def export_bake(context, hair_obj, filepath):
     try:
         with _exporting(scene, objects, frame_start, frame_end):
             if kind == "Alembic":
-                result = bpy.ops.wm.alembic_export(filepath=str(path), start=frame_start,
-                                                   end=frame_end, selected=True)
+                result = bpy.ops.wm.alembic_export(
+                    filepath=str(path), start=frame_start, end=frame_end, selected=True
+                )
             else:
-                result = bpy.ops.wm.usd_export(filepath=str(path), selected_objects_only=True,
-                                               export_animation=True)
+                result = bpy.ops.wm.usd_export(
+                    filepath=str(path), selected_objects_only=True, export_animation=True
+                )
     except RuntimeError as error:
         raise HairdynError(f"The {kind} export failed: {error}") from None
     finally:
         bpy.app.handlers.frame_change_post.remove(handler)
     if result != {'FINISHED'} or not path.is_file():
         raise HairdynError(f"The {kind} exporter wrote no file at '{path}'")
-    return {"file": str(path), "format": kind, "frame_start": frame_start,
-            "frame_end": frame_end, "objects": [o.name for o in objects]}
+    return {
+        "file": str(path),
+        "format": kind,
+        "frame_start": frame_start,
+        "frame_end": frame_end,
+        "objects": [o.name for o in objects],
+    }
 
 
 def read_positions(obj, depsgraph):
@@ -173,7 +190,7 @@ def read_positions(obj, depsgraph):
 
 
 class HAIRDYN_OT_export_bake(bpy.types.Operator):
-    """Export the baked frames of the output hair (guides and child hairs, with radius and point attributes) to Alembic or USD"""
+    """Export the baked output hair (guides, child hairs, radius, attributes) to Alembic or USD"""
 
     bl_idname = "hairdyn.export_bake"
     bl_label = "Export Bake"
@@ -190,8 +207,10 @@ class HAIRDYN_OT_export_bake(bpy.types.Operator):
             return False
         if not available():
             if hasattr(cls, "poll_message_set"):  # 3.0+
-                cls.poll_message_set(f"This Blender ({bpy.app.version_string}) is built "
-                                     "without the Alembic and USD exporters")
+                cls.poll_message_set(
+                    f"This Blender ({bpy.app.version_string}) is built "
+                    "without the Alembic and USD exporters"
+                )
             return False
         return True
 
@@ -203,8 +222,9 @@ class HAIRDYN_OT_export_bake(bpy.types.Operator):
 
     def invoke(self, context, _event):
         if not self.filepath:
-            self.filepath = bpy.path.clean_name(context.object.name) + \
-                (".abc" if ".abc" in available() else ".usd")
+            self.filepath = bpy.path.clean_name(context.object.name) + (
+                ".abc" if ".abc" in available() else ".usd"
+            )
         context.window_manager.fileselect_add(self)
         return {'RUNNING_MODAL'}
 
@@ -214,6 +234,9 @@ class HAIRDYN_OT_export_bake(bpy.types.Operator):
         except HairdynError as error:
             self.report({'ERROR'}, str(error))
             return {'CANCELLED'}
-        self.report({'INFO'}, f"Exported frames {result['frame_start']}-{result['frame_end']} "
-                              f"of {', '.join(result['objects'])} to {result['file']}")
+        self.report(
+            {'INFO'},
+            f"Exported frames {result['frame_start']}-{result['frame_end']} "
+            f"of {', '.join(result['objects'])} to {result['file']}",
+        )
         return {'FINISHED'}

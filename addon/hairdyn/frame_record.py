@@ -13,6 +13,7 @@ ms_per_frame, stretch_max and penetration_share (the share is taken over the sam
 frame). The plot is drawn with numpy and written as PNG with zlib: no plotting library, so it
 is the same in every Blender.
 """
+
 import csv
 import os
 import struct
@@ -25,9 +26,13 @@ import numpy as np
 FIGURES = ("ms", "penetration_share", "stretch", "kinetic_energy", "contacts")
 CSV_NAME = "frame_record.csv"
 PNG_NAME = "frame_record.png"
-_TITLES = {"ms": "ms per frame", "penetration_share": "penetration share %",
-           "stretch": "stretch", "kinetic_energy": "kinetic energy m2/s2",
-           "contacts": "contacts"}
+_TITLES = {
+    "ms": "ms per frame",
+    "penetration_share": "penetration share %",
+    "stretch": "stretch",
+    "kinetic_energy": "kinetic energy m2/s2",
+    "contacts": "contacts",
+}
 _SHOWN_SCALE = {"penetration_share": 100.0}  # plotted as percent
 
 
@@ -76,11 +81,14 @@ class FrameRecord:
         """The report's figures from the record: ms_per_frame (median), stretch_max,
         penetration_share (mean), and the frame count."""
         table = self.table()
-        return {"frames": len(table["frame"]),
-                "ms_per_frame": float(np.median(table["ms"])) if len(table["frame"]) else 0.0,
-                "stretch_max": float(table["stretch"].max(initial=0.0)),
-                "penetration_share": float(table["penetration_share"].mean())
-                if len(table["frame"]) else 0.0}
+        return {
+            "frames": len(table["frame"]),
+            "ms_per_frame": float(np.median(table["ms"])) if len(table["frame"]) else 0.0,
+            "stretch_max": float(table["stretch"].max(initial=0.0)),
+            "penetration_share": float(table["penetration_share"].mean())
+            if len(table["frame"])
+            else 0.0,
+        }
 
     def table(self):
         """{"frame": int array, figure: float array} in frame order."""
@@ -110,29 +118,47 @@ start = FrameRecord.start
 def read(path):
     """{frame: {figure: value}} from a frame_record.csv."""
     with open(path, newline="") as file:
-        return {int(row["frame"]): {name: float(row[name]) for name in FIGURES}
-                for row in csv.DictReader(file)}
+        return {
+            int(row["frame"]): {name: float(row[name]) for name in FIGURES}
+            for row in csv.DictReader(file)
+        }
 
 
 # ---- drawing -----------------------------------------------------------------------------------
 
 _GLYPHS = {  # 5 x 7, rows top to bottom
-    "0": "01110 10001 10011 10101 11001 10001 01110", "1": "00100 01100 00100 00100 00100 00100 01110",
-    "2": "01110 10001 00001 00010 00100 01000 11111", "3": "11110 00001 00001 01110 00001 00001 11110",
-    "4": "00010 00110 01010 10010 11111 00010 00010", "5": "11111 10000 11110 00001 00001 10001 01110",
-    "6": "00110 01000 10000 11110 10001 10001 01110", "7": "11111 00001 00010 00100 01000 01000 01000",
-    "8": "01110 10001 10001 01110 10001 10001 01110", "9": "01110 10001 10001 01111 00001 00010 01100",
-    ".": "00000 00000 00000 00000 00000 01100 01100", "-": "00000 00000 00000 11111 00000 00000 00000",
-    "+": "00000 00100 00100 11111 00100 00100 00000", "%": "11000 11001 00010 00100 01000 10011 00011",
-    "/": "00000 00001 00010 00100 01000 10000 00000", " ": "00000 00000 00000 00000 00000 00000 00000",
-    "a": "00000 00000 01110 00001 01111 10001 01111", "c": "00000 00000 01110 10000 10000 10001 01110",
-    "e": "00000 00000 01110 10001 11111 10000 01110", "f": "00110 01001 01000 11100 01000 01000 01000",
-    "g": "00000 01111 10001 10001 01111 00001 01110", "h": "10000 10000 10110 11001 10001 10001 10001",
-    "i": "00100 00000 01100 00100 00100 00100 01110", "k": "10000 10000 10010 10100 11000 10100 10010",
-    "m": "00000 00000 11010 10101 10101 10001 10001", "n": "00000 00000 10110 11001 10001 10001 10001",
-    "o": "00000 00000 01110 10001 10001 10001 01110", "p": "00000 00000 11110 10001 11110 10000 10000",
-    "r": "00000 00000 10110 11001 10000 10000 10000", "s": "00000 00000 01110 10000 01110 00001 11110",
-    "t": "01000 01000 11100 01000 01000 01001 00110", "x": "00000 00000 10001 01010 00100 01010 10001",
+    "0": "01110 10001 10011 10101 11001 10001 01110",
+    "1": "00100 01100 00100 00100 00100 00100 01110",
+    "2": "01110 10001 00001 00010 00100 01000 11111",
+    "3": "11110 00001 00001 01110 00001 00001 11110",
+    "4": "00010 00110 01010 10010 11111 00010 00010",
+    "5": "11111 10000 11110 00001 00001 10001 01110",
+    "6": "00110 01000 10000 11110 10001 10001 01110",
+    "7": "11111 00001 00010 00100 01000 01000 01000",
+    "8": "01110 10001 10001 01110 10001 10001 01110",
+    "9": "01110 10001 10001 01111 00001 00010 01100",
+    ".": "00000 00000 00000 00000 00000 01100 01100",
+    "-": "00000 00000 00000 11111 00000 00000 00000",
+    "+": "00000 00100 00100 11111 00100 00100 00000",
+    "%": "11000 11001 00010 00100 01000 10011 00011",
+    "/": "00000 00001 00010 00100 01000 10000 00000",
+    " ": "00000 00000 00000 00000 00000 00000 00000",
+    "a": "00000 00000 01110 00001 01111 10001 01111",
+    "c": "00000 00000 01110 10000 10000 10001 01110",
+    "e": "00000 00000 01110 10001 11111 10000 01110",
+    "f": "00110 01001 01000 11100 01000 01000 01000",
+    "g": "00000 01111 10001 10001 01111 00001 01110",
+    "h": "10000 10000 10110 11001 10001 10001 10001",
+    "i": "00100 00000 01100 00100 00100 00100 01110",
+    "k": "10000 10000 10010 10100 11000 10100 10010",
+    "m": "00000 00000 11010 10101 10101 10001 10001",
+    "n": "00000 00000 10110 11001 10001 10001 10001",
+    "o": "00000 00000 01110 10001 10001 10001 01110",
+    "p": "00000 00000 11110 10001 11110 10000 10000",
+    "r": "00000 00000 10110 11001 10000 10000 10000",
+    "s": "00000 00000 01110 10000 01110 00001 11110",
+    "t": "01000 01000 11100 01000 01000 01001 00110",
+    "x": "00000 00000 10001 01010 00100 01010 10001",
     "y": "00000 00000 10001 10001 01111 00001 01110",
 }
 _INK, _LINE, _FRAME_INK = (30, 30, 30), (31, 119, 180), (160, 160, 160)
@@ -145,8 +171,8 @@ def _text(image, x, y, text, scale=2, colour=_INK):
         mask = np.array([[bit == "1" for bit in row] for row in rows])
         mask = np.kron(mask, np.ones((scale, scale), dtype=bool))
         height, width = mask.shape
-        block = image[y:y + height, x:x + width]
-        block[mask[:block.shape[0], :block.shape[1]]] = colour
+        block = image[y : y + height, x : x + width]
+        block[mask[: block.shape[0], : block.shape[1]]] = colour
         x += width + scale
 
 
@@ -162,7 +188,7 @@ def _polyline(image, xs, ys, colour=_LINE):
         points += list(zip(np.linspace(x0, x1, count), np.linspace(y0, y1, count)))
     for x, y in points:
         x, y = int(round(x)), int(round(y))
-        image[max(y - 1, 0):y + 1, max(x - 1, 0):x + 1] = colour
+        image[max(y - 1, 0) : y + 1, max(x - 1, 0) : x + 1] = colour
 
 
 def plot(table, width=800, panel_height=110):
@@ -176,8 +202,8 @@ def plot(table, width=800, panel_height=110):
     for index, name in enumerate(FIGURES):
         top = margin_top + index * (panel_height + gap)
         bottom = top + panel_height
-        image[top, x0:x1 + 1] = image[bottom, x0:x1 + 1] = _FRAME_INK
-        image[top:bottom + 1, x0] = image[top:bottom + 1, x1] = _FRAME_INK
+        image[top, x0 : x1 + 1] = image[bottom, x0 : x1 + 1] = _FRAME_INK
+        image[top : bottom + 1, x0] = image[top : bottom + 1, x1] = _FRAME_INK
         _text(image, x0, top - 18, _TITLES[name])
         values = table[name] * _SHOWN_SCALE.get(name, 1.0)
         if len(values) == 0:
@@ -205,12 +231,19 @@ def write_png(path, rgb):
     raw = np.concatenate([np.zeros((height, 1), dtype=np.uint8), rgb.reshape(height, -1)], axis=1)
 
     def chunk(kind, data):
-        return (struct.pack(">I", len(data)) + kind + data +
-                struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+        return (
+            struct.pack(">I", len(data))
+            + kind
+            + data
+            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+        )
 
-    data = (b"\x89PNG\r\n\x1a\n" +
-            chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
-            chunk(b"IDAT", zlib.compress(raw.tobytes(), 6)) + chunk(b"IEND", b""))
+    data = (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+        + chunk(b"IDAT", zlib.compress(raw.tobytes(), 6))
+        + chunk(b"IEND", b"")
+    )
     path = Path(path)
     temporary = path.with_name(path.name + ".tmp")
     temporary.write_bytes(data)
@@ -223,15 +256,16 @@ def read_png_rgb(path):
     width, height = struct.unpack(">II", data[16:24])
     position, idat = 8, b""
     while position < len(data):
-        length = struct.unpack(">I", data[position:position + 4])[0]
-        if data[position + 4:position + 8] == b"IDAT":
-            idat += data[position + 8:position + 8 + length]
+        length = struct.unpack(">I", data[position : position + 4])[0]
+        if data[position + 4 : position + 8] == b"IDAT":
+            idat += data[position + 8 : position + 8 + length]
         position += 12 + length
     raw = np.frombuffer(zlib.decompress(idat), dtype=np.uint8).reshape(height, 1 + width * 3)
     return raw[:, 1:].reshape(height, width, 3)
 
 
 # ---- the panel's button ------------------------------------------------------------------------
+
 
 class HAIRDYN_OT_open_frame_record(bpy.types.Operator):
     """Open the plot of the bake's per-frame record (ms, penetration, stretch, kinetic energy, contacts)"""
@@ -261,7 +295,7 @@ class HAIRDYN_OT_open_frame_record(bpy.types.Operator):
         path = self.plot_path(context)
         image = bpy.data.images.load(str(path), check_existing=True)
         image.reload()
-        for area in (context.screen.areas if context.screen else ()):
+        for area in context.screen.areas if context.screen else ():
             if area.type == 'IMAGE_EDITOR':
                 area.spaces.active.image = image
                 break

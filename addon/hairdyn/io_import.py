@@ -5,7 +5,7 @@ from bpy.props import EnumProperty, FloatProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
 from .errors import HairdynError
-from .hair_formats import read_cem_hair, read_tfx
+from .hair_formats import HairFile, read_cem_hair, read_tfx
 
 # Point attribute that marks the vertices a file pins (TressFX w == 0; the roots otherwise).
 FIXED_ATTRIBUTE = "hairdyn_fixed"
@@ -19,12 +19,54 @@ def to_blender_axes(positions, up_axis):
     return positions
 
 
-def create_hair_object(context, name, hair, up_axis='Y', scale=1.0):
-    """A new Curves object holding a HairFile, linked to the active collection."""
+# A groom whose bounding box is outside this range (metres) is probably in other units.
+PLAUSIBLE_SIZE = (0.01, 10.0)
+
+
+def size_warning(positions):
+    """A sentence when the groom is implausibly large or small for hair (metres), else None."""
+    if len(positions) == 0:
+        return None
+    size = float(np.linalg.norm(positions.max(axis=0) - positions.min(axis=0)))
+    low, high = PLAUSIBLE_SIZE
+    if low <= size <= high:
+        return None
+    return (f"The groom is {size:.3g} m across, {'more' if size > high else 'less'} than hair "
+            f"usually is ({low:g} to {high:g} m): check the Scale (TressFX files carry no "
+            "units; 0.01 turns centimetres into metres)")
+
+
+def drop_degenerate_strands(hair, positions):
+    """(hair, positions) without the strands whose segments are too short to have a direction
+    (the native tolerance: a millionth of the groom's size), and how many were dropped."""
     from . import bridge
 
-    curves = bridge.new_curves_data(name, np.diff(hair.curve_offsets))
+    degenerate = bridge.degenerate_strand_mask(hair.curve_offsets, positions)
+    if degenerate is None or not degenerate.any():
+        return hair, positions, 0
+    if degenerate.all():
+        raise HairdynError(f"Every strand ({len(degenerate)}) has a zero-length segment")
+    offsets, points = bridge.keep_strands(hair.curve_offsets, ~degenerate)
+    kept = HairFile(np.ascontiguousarray(hair.positions[points]), offsets, hair.fixed[points],
+                    None if hair.thickness is None else hair.thickness[points])
+    return kept, np.ascontiguousarray(positions[points]), int(degenerate.sum())
+
+
+def create_hair_object(context, name, hair, up_axis='Y', scale=1.0, warnings=None):
+    """A new Curves object holding a HairFile, linked to the active collection. Strands too
+    short to simulate are left out; `warnings` (a list) receives what the artist should know."""
+    from . import bridge
+
     positions = to_blender_axes(hair.positions, up_axis) * np.float32(scale)
+    hair, positions, dropped = drop_degenerate_strands(hair, positions)
+    notes = [] if warnings is None else warnings
+    if dropped:
+        notes.append(f"{dropped} strands with a zero-length segment (shorter than a millionth "
+                     "of the groom's size) were left out")
+    size_note = size_warning(positions)
+    if size_note:
+        notes.append(size_note)
+    curves = bridge.new_curves_data(name, np.diff(hair.curve_offsets))
     curves.position_data.foreach_set("vector", np.ascontiguousarray(positions).ravel())
     fixed = curves.attributes.new(FIXED_ATTRIBUTE, 'BOOLEAN', 'POINT')
     fixed.data.foreach_set("value", hair.fixed.astype(bool))
@@ -59,11 +101,18 @@ class _ImportHair(ImportHelper):
             return {'CANCELLED'}
         for other in context.selected_objects:
             other.select_set(False)
-        obj = create_hair_object(context, path.stem, hair, self.up_axis, self.scale)
+        warnings = []
+        try:
+            obj = create_hair_object(context, path.stem, hair, self.up_axis, self.scale, warnings)
+        except HairdynError as error:
+            self.report({'ERROR'}, str(error))
+            return {'CANCELLED'}
         obj.select_set(True)
         context.view_layer.objects.active = obj
-        self.report({'INFO'}, f"Imported {len(hair.curve_offsets) - 1} strands, "
-                              f"{len(hair.positions)} points from '{path.name}'")
+        for warning in warnings:
+            self.report({'WARNING'}, warning)
+        self.report({'INFO'}, f"Imported {len(obj.data.curves)} strands, "
+                              f"{len(obj.data.points)} points from '{path.name}'")
         return {'FINISHED'}
 
 

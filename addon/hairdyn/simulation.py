@@ -141,7 +141,7 @@ class Simulation:
         """Exact penetration of the strands into the colliders' real triangles, or None."""
         if self.colliders is None:
             return None
-        return self.colliders.penetration(self.positions)
+        return self.colliders.penetration(self.positions, self.groom.curve_offsets)
 
     def strand_arrays(self):
         positions = self.positions
@@ -200,11 +200,14 @@ class Runner:
         frame_set(context.scene, frame_start)
         self.simulation = Simulation(hair_obj, context.evaluated_depsgraph_get(), context.scene)
         if cache is not None:
-            cache.check_topology(self.simulation.groom.curve_offsets)
+            cache.check_topology(
+                self.simulation.groom.curve_offsets, self.simulation.groom.positions_wo
+            )
         self.dt = frame_dt(context.scene)
         self.next_frame = frame_start
         self.step_ms, self.collision_ms, self.nan_frames, self.stretch_max = [], [], 0, 0.0
         self.penetration_max, self.deeper_num, self.checked_num = 0.0, 0, 0
+        self.roots_inside = 0
         if resume_from is not None:
             # Solvers carry state the cache does not hold (angles, the head's motion), so a
             # resumed bake re-simulates the frames it keeps, without writing them: the same
@@ -249,6 +252,7 @@ class Runner:
             self.penetration_max = max(self.penetration_max, penetration["penetration_max"])
             self.deeper_num += penetration["deeper_num"]
             self.checked_num += penetration["points_num"]
+            self.roots_inside = max(self.roots_inside, penetration["roots_inside"])
         frame_data = self.simulation.frame()
         if self.cache is not None:
             self.cache.write_frame(
@@ -287,6 +291,8 @@ class Runner:
             "colliders": simulation.colliders.names if simulation.colliders else [],
             "penetration_max": float(self.penetration_max),
             "penetration_share": self.deeper_num / self.checked_num if self.checked_num else 0.0,
+            "roots_inside": self.roots_inside,
+            "groom_warnings": list(simulation.groom.warnings),
             "penetration_tolerance": simulation.colliders.tolerance_wo()
             if simulation.colliders
             else None,

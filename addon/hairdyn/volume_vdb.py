@@ -13,6 +13,7 @@ The file holds one float grid named ``density`` (nodes per grid vertex, a fog vo
 transform maps voxel (i, j, k) to world space, so a Volume object with the identity matrix
 shows it where the hair is.
 """
+
 import importlib.util
 import os
 import sys
@@ -44,8 +45,10 @@ def find_writer():
             _reason = f"Debian's pyopenvdb could not be loaded here ({error})"
             return None, _reason
     if module is None:
-        _reason = ("No OpenVDB writer for this Python: install Debian's python3-openvdb "
-                   "(apt-get install python3-openvdb) for Python 3.11")
+        _reason = (
+            "No OpenVDB writer for this Python: install Debian's python3-openvdb "
+            "(apt-get install python3-openvdb) for Python 3.11"
+        )
         return None, _reason
     try:  # NumPy interop is what the writer needs; a NumPy 2 host cannot use a NumPy 1 build.
         module.FloatGrid().copyFromArray(np.zeros((2, 2, 2), np.float32))

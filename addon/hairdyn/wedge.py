@@ -18,6 +18,7 @@ by side, in the summary's order.
 Importing this module needs neither bpy nor Dask: the driver runs wherever Dask is, the tasks
 inside Blender.
 """
+
 import csv
 import itertools
 import json
@@ -40,6 +41,7 @@ class WedgeError(Exception):
 
 
 # ---- the parameter sets ------------------------------------------------------------------------
+
 
 def read_table(path):
     """Parameter sets from a CSV file (header: parameter names) or a JSON list of objects;
@@ -90,14 +92,18 @@ def parameter_sets(table=None, vary=()):
     rows = read_table(table) if table else [{}]
     axes = parse_vary(vary)
     names = [name for name, _ in axes]
-    sets = [{**row, **dict(zip(names, values))}
-            for row in rows for values in itertools.product(*(v for _, v in axes))]
+    sets = [
+        {**row, **dict(zip(names, values))}
+        for row in rows
+        for values in itertools.product(*(v for _, v in axes))
+    ]
     if not sets or sets == [{}]:
         raise WedgeError("no parameter sets: give --table FILE and/or --vary NAME=V1,V2")
     return sets
 
 
 # ---- one task: a bake in its own Blender process -----------------------------------------------
+
 
 def host_command(blender=None, python=None):
     """How a task starts Blender: ['blender', '-b'] style for the binary, or [python] for a
@@ -111,8 +117,15 @@ def task_command(host, spec_path):
     script = [str(THIS_FILE), "--", "task", str(spec_path)]
     if "python" in host:
         return [host["python"], str(THIS_FILE), "task", str(spec_path)]
-    return [host["blender"], "-b", "--factory-startup", "--python-exit-code", "1",
-            "--python", *script]
+    return [
+        host["blender"],
+        "-b",
+        "--factory-startup",
+        "--python-exit-code",
+        "1",
+        "--python",
+        *script,
+    ]
 
 
 def prepare_task(spec, host):
@@ -138,9 +151,14 @@ def task_result(spec, process=None, error=None):
     if result_path.is_file():
         result = json.loads(result_path.read_text())
     else:  # the process died before it could say
-        result = {"status": "failed", "report": None, "image": None,
-                  "message": _error_line(output) or output.strip()[-300:] or
-                  f"the bake process ended with exit code {returncode}"}
+        result = {
+            "status": "failed",
+            "report": None,
+            "image": None,
+            "message": _error_line(output)
+            or output.strip()[-300:]
+            or f"the bake process ended with exit code {returncode}",
+        }
     result.update(name=spec["name"], parameters=spec["parameters"], returncode=returncode)
     result_path.write_text(json.dumps(result, indent=2))
     return result
@@ -169,8 +187,15 @@ def _in_blender_task(spec_path):
     bpy.ops.wm.open_mainfile(filepath=spec["blend"])
     report_path = folder / "report.json"
     report_path.unlink(missing_ok=True)
-    argv = ["bake", "--object", spec["object"], "--cache", str(folder / "cache"),
-            "--report", str(report_path)]
+    argv = [
+        "bake",
+        "--object",
+        spec["object"],
+        "--cache",
+        str(folder / "cache"),
+        "--report",
+        str(report_path),
+    ]
     if spec.get("frames"):
         argv += ["--frames", *map(str, spec["frames"])]
     for name, value in {**spec.get("common", {}), **spec["parameters"]}.items():
@@ -186,8 +211,10 @@ def _in_blender_task(spec_path):
     if report_path.is_file():
         result["report"] = json.loads(report_path.read_text())
     if code != 0:
-        result["message"] = _error_line(errors.getvalue()).removeprefix("hairdyn: error: ") or \
-            f"the bake ended with exit code {code}"
+        result["message"] = (
+            _error_line(errors.getvalue()).removeprefix("hairdyn: error: ")
+            or f"the bake ended with exit code {code}"
+        )
     else:
         try:
             result["image"] = str(render_last_frame(bpy.context, spec, folder / LAST_FRAME))
@@ -244,6 +271,7 @@ def _add_front_camera(scene, obj):
 
 # ---- the contact sheet -------------------------------------------------------------------------
 
+
 def _in_blender_sheet(sheet_spec_path):
     """Inside Blender: tile the listed PNGs (None: a grey tile) into one PNG."""
     import numpy as np
@@ -269,11 +297,11 @@ def _in_blender_sheet(sheet_spec_path):
     for index, tile in enumerate(tiles):
         top = (rows - 1 - index // columns) * size[0]  # Blender's rows run bottom-up
         left = (index % columns) * size[1]
-        block = sheet[top:top + size[0], left:left + size[1]]
+        block = sheet[top : top + size[0], left : left + size[1]]
         if tile is None:
             block[..., :3] = 0.5  # a failed set
         else:
-            block[:tile.shape[0], :tile.shape[1]] = tile
+            block[: tile.shape[0], : tile.shape[1]] = tile
     image = bpy.data.images.new("hairdyn contact sheet", sheet.shape[1], sheet.shape[0], alpha=True)
     image.pixels.foreach_set(sheet.ravel())
     image.filepath_raw = spec["out"]
@@ -284,16 +312,20 @@ def _in_blender_sheet(sheet_spec_path):
 
 # ---- the driver --------------------------------------------------------------------------------
 
+
 def _client(scheduler, workers):
     try:
         from distributed import Client, LocalCluster
     except ImportError:
-        raise WedgeError("cli.py wedge needs Dask distributed in this Python (Debian: apt "
-                         "install python3-distributed; pip: dask distributed)") from None
+        raise WedgeError(
+            "cli.py wedge needs Dask distributed in this Python (Debian: apt "
+            "install python3-distributed; pip: dask distributed)"
+        ) from None
     if scheduler:
         return Client(scheduler, timeout="20s"), None
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+    cluster = LocalCluster(
+        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+    )
     return Client(cluster), cluster
 
 
@@ -304,14 +336,18 @@ def _done(folder, parameters, common):
         spec = json.loads((folder / "spec.json").read_text())
     except (OSError, ValueError):
         return None
-    if result.get("status") != "done" or spec.get("parameters") != parameters or \
-            spec.get("common") != common:
+    if (
+        result.get("status") != "done"
+        or spec.get("parameters") != parameters
+        or spec.get("common") != common
+    ):
         return None
     return result
 
 
-def run_wedge(blend, obj, sets, out_dir, *, frames=None, common=None, host=None,
-              scheduler=None, workers=2):
+def run_wedge(
+    blend, obj, sets, out_dir, *, frames=None, common=None, host=None, scheduler=None, workers=2
+):
     """Bake every parameter set on Dask (a local cluster of `workers` processes, or the
     scheduler at `scheduler`); returns the summary, also written to out_dir/summary.json."""
     out_dir = Path(out_dir).resolve()
@@ -321,9 +357,15 @@ def run_wedge(blend, obj, sets, out_dir, *, frames=None, common=None, host=None,
     specs, results = [], {}
     for index, parameters in enumerate(sets):
         name = f"set_{index:03d}"
-        spec = {"name": name, "blend": str(Path(blend).resolve()), "object": obj,
-                "frames": list(frames) if frames else None, "parameters": parameters,
-                "common": common, "folder": str(out_dir / name)}
+        spec = {
+            "name": name,
+            "blend": str(Path(blend).resolve()),
+            "object": obj,
+            "frames": list(frames) if frames else None,
+            "parameters": parameters,
+            "common": common,
+            "folder": str(out_dir / name),
+        }
         specs.append(spec)
         previous = _done(out_dir / name, parameters, common)
         if previous is not None:
@@ -332,9 +374,17 @@ def run_wedge(blend, obj, sets, out_dir, *, frames=None, common=None, host=None,
     if pending:
         client, cluster = _client(scheduler, workers)
         try:
-            futures = [client.submit(subprocess.run, prepare_task(spec, host), capture_output=True,
-                                     text=True, timeout=TASK_TIMEOUT_S, pure=False)
-                       for spec in pending]
+            futures = [
+                client.submit(
+                    subprocess.run,
+                    prepare_task(spec, host),
+                    capture_output=True,
+                    text=True,
+                    timeout=TASK_TIMEOUT_S,
+                    pure=False,
+                )
+                for spec in pending
+            ]
             for spec, future in zip(pending, futures):
                 try:
                     result = task_result(spec, process=future.result())
@@ -345,18 +395,28 @@ def run_wedge(blend, obj, sets, out_dir, *, frames=None, common=None, host=None,
             client.close()
             if cluster is not None:
                 cluster.close()
-    entries = [{"name": spec["name"], "parameters": spec["parameters"],
-                "folder": spec["folder"], **{k: v for k, v in results[spec["name"]].items()
-                                             if k not in ("name", "parameters")}}
-               for spec in specs]
-    summary = {"blend": str(Path(blend).resolve()), "object": obj, "common": common,
-               "sets": entries,
-               "done": sum(e["status"] == "done" for e in entries),
-               "failed": sum(e["status"] != "done" for e in entries),
-               "baked_now": sum(not e["skipped"] for e in entries),
-               "contact_sheet": None}
-    sheet = make_contact_sheet(host, [e.get("image") if e["status"] == "done" else None
-                                      for e in entries], out_dir)
+    entries = [
+        {
+            "name": spec["name"],
+            "parameters": spec["parameters"],
+            "folder": spec["folder"],
+            **{k: v for k, v in results[spec["name"]].items() if k not in ("name", "parameters")},
+        }
+        for spec in specs
+    ]
+    summary = {
+        "blend": str(Path(blend).resolve()),
+        "object": obj,
+        "common": common,
+        "sets": entries,
+        "done": sum(e["status"] == "done" for e in entries),
+        "failed": sum(e["status"] != "done" for e in entries),
+        "baked_now": sum(not e["skipped"] for e in entries),
+        "contact_sheet": None,
+    }
+    sheet = make_contact_sheet(
+        host, [e.get("image") if e["status"] == "done" else None for e in entries], out_dir
+    )
     summary["contact_sheet"] = str(sheet) if sheet else None
     (out_dir / SUMMARY).write_text(json.dumps(summary, indent=2))
     return summary
@@ -372,10 +432,13 @@ def make_contact_sheet(host, images, out_dir):
     spec_path.write_text(json.dumps({"images": images, "out": str(out)}))
     command = task_command(host, spec_path)
     command[command.index("task")] = "sheet"
-    process = subprocess.run(command, capture_output=True, text=True, timeout=600,
-                             env=_child_environment())
+    process = subprocess.run(
+        command, capture_output=True, text=True, timeout=600, env=_child_environment()
+    )
     if process.returncode != 0 or not out.is_file():
-        raise WedgeError(f"the contact sheet was not made: {_error_line(process.stderr + process.stdout)}")
+        raise WedgeError(
+            f"the contact sheet was not made: {_error_line(process.stderr + process.stdout)}"
+        )
     return out
 
 
@@ -385,15 +448,27 @@ def add_arguments(parser):
     parser.add_argument("--object", required=True, help="name of the hair object")
     parser.add_argument("--out", required=True, help="output folder (one subfolder per set)")
     parser.add_argument("--table", help="CSV (header: parameter names) or JSON list of sets")
-    parser.add_argument("--vary", action="append", default=[], metavar="NAME=V1,V2,...",
-                        help="a parameter's values; several --vary make their product")
-    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                        help="a parameter for every set (repeatable)")
+    parser.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="NAME=V1,V2,...",
+        help="a parameter's values; several --vary make their product",
+    )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a parameter for every set (repeatable)",
+    )
     parser.add_argument("--frames", nargs=2, type=int, metavar=("START", "END"))
     parser.add_argument("--workers", type=int, default=2, help="local cluster size (default 2)")
     parser.add_argument("--scheduler", help="tcp://HOST:PORT of an existing Dask scheduler")
-    parser.add_argument("--blender", help="Blender binary the tasks run (default: the host's "
-                                          "own, else 'blender' on PATH)")
+    parser.add_argument(
+        "--blender",
+        help="Blender binary the tasks run (default: the host's own, else 'blender' on PATH)",
+    )
     parser.add_argument("--python", help="a Python with the bpy module, instead of --blender")
 
 
@@ -416,11 +491,19 @@ def main(args):
         print(f"hairdyn: error: {error}", file=sys.stderr)
         return 2
     try:
-        summary = run_wedge(args.blend, args.object, sets, args.out, frames=args.frames,
-                            common=common,
-                            host=host_command(args.blender, args.python)
-                            if args.blender or args.python else own_host(),
-                            scheduler=args.scheduler, workers=args.workers)
+        summary = run_wedge(
+            args.blend,
+            args.object,
+            sets,
+            args.out,
+            frames=args.frames,
+            common=common,
+            host=host_command(args.blender, args.python)
+            if args.blender or args.python
+            else own_host(),
+            scheduler=args.scheduler,
+            workers=args.workers,
+        )
     except WedgeError as error:
         print(f"hairdyn: error: {error}", file=sys.stderr)
         return 1
@@ -428,8 +511,10 @@ def main(args):
         state = entry["status"] + (" (already done)" if entry["skipped"] else "")
         message = f": {entry['message']}" if entry.get("message") else ""
         print(f"hairdyn: {entry['name']} {entry['parameters']} {state}{message}")
-    print(f"hairdyn: {summary['done']} done, {summary['failed']} failed; summary in "
-          f"{Path(args.out) / SUMMARY}")
+    print(
+        f"hairdyn: {summary['done']} done, {summary['failed']} failed; summary in "
+        f"{Path(args.out) / SUMMARY}"
+    )
     return 1 if summary["failed"] else 0
 
 
@@ -447,7 +532,7 @@ def own_host():
 
 
 if __name__ == "__main__":
-    arguments = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+    arguments = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else sys.argv[1:]
     if len(arguments) == 2 and arguments[0] in ("task", "sheet"):
         run = _in_blender_task if arguments[0] == "task" else _in_blender_sheet
         sys.exit(run(arguments[1]))

@@ -127,7 +127,29 @@ mat4 as_matrix(const py::handle obj, const char *name)
       }
     }
   }
-  return mat4(m);
+  /* The core inverts these matrices (head frame, world to map space): a singular 3×3 part (an
+   * object scaled to zero, or flattened onto a plane or a line) has no inverse and would turn
+   * every point into NaN. The test is relative to the columns' lengths, so that a small but
+   * invertible scale passes. */
+  const glm::dmat3 linear(m);
+  const double det = glm::determinant(linear);
+  const double lengths = glm::length(linear[0]) * glm::length(linear[1]) * glm::length(linear[2]);
+  if (!(std::abs(det) > 1e-9 * lengths && lengths > 0.0)) {
+    fail(std::string(name) + " is singular: its object is scaled to zero or flattened along "
+         "some axis, so it has no inverse; give the object a non-zero scale");
+  }
+  const mat4 result(m);
+  const mat3 inverse = glm::inverse(mat3(result));
+  for (int col = 0; col < 4; col++) {
+    if (!std::isfinite(result[col].x) || !std::isfinite(result[col].y) ||
+        !std::isfinite(result[col].z) || !std::isfinite(result[col].w) ||
+        (col < 3 && !is_finite(inverse[col])))
+    {
+      fail(std::string(name) + " has values beyond single precision (its scale or position is "
+           "too large or too small to simulate)");
+    }
+  }
+  return result;
 }
 
 void check_groom(const Span<int32_t> curve_offsets, const Span<vec3> positions)

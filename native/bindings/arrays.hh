@@ -35,7 +35,9 @@ Span<float> as_float(py::handle obj, const char *name);
 /* (N, 3, 3) float32, all finite: N frames whose rows [i, 0], [i, 1], [i, 2] are the tangent,
  * bitangent and normal (glm's column-major mat3, column by column). */
 Span<mat3> as_frames(py::handle obj, const char *name);
-/* A 4x4 matrix in Blender's row-major order (numpy.array(obj.matrix_world)), any float dtype. */
+/* A 4x4 matrix in Blender's row-major order (numpy.array(obj.matrix_world)), any float dtype;
+ * finite, invertible (a singular 3×3 part is refused: the core inverts every transform) and
+ * within single precision. */
 mat4 as_matrix(py::handle obj, const char *name);
 /* Raises "Invalid hair: ..." unless the strands can be simulated. */
 void check_groom(Span<int32_t> curve_offsets, Span<vec3> positions);

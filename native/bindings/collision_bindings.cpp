@@ -105,7 +105,8 @@ py::dict contacts_dict(const ColliderSet &set, const py::handle points)
   return result;
 }
 
-py::dict stats_dict(const PenetrationStats &stats, const float tolerance_wo)
+py::dict stats_dict(const PenetrationStats &stats, const float tolerance_wo,
+                    const bool with_roots = false)
 {
   py::dict result;
   result["penetration_max"] = stats.max_depth;
@@ -113,7 +114,30 @@ py::dict stats_dict(const PenetrationStats &stats, const float tolerance_wo)
   result["deeper_num"] = stats.deeper_num;
   result["points_num"] = stats.points_num;
   result["tolerance"] = tolerance_wo;
+  if (with_roots) {
+    result["roots_inside"] = stats.roots_inside;
+    result["roots_penetration_max"] = stats.roots_depth_max;
+  }
   return result;
+}
+
+/* None, or (C + 1,) int32 curve offsets over `points_num` points. */
+Span<int32_t> optional_curve_offsets(const py::handle curve_offsets, const int64_t points_num)
+{
+  if (curve_offsets.is_none()) {
+    return {};
+  }
+  const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+  if (offsets.size() < 2 || offsets[0] != 0 || offsets.last() != points_num) {
+    fail("curve_offsets must start at 0 and end at the number of points (" +
+         std::to_string(points_num) + ")");
+  }
+  for (int64_t i = 0; i + 1 < offsets.size(); i++) {
+    if (offsets[i + 1] < offsets[i]) {
+      fail("curve_offsets must not decrease (strand " + std::to_string(i) + ")");
+    }
+  }
+  return offsets;
 }
 
 float tolerance_or_default(const py::handle tolerance, const float fallback)
@@ -297,18 +321,23 @@ void bind_collision(py::module_ &m)
            "As Collider.find_contacts, deepest contact over all colliders.")
       .def(
           "penetration_stats",
-          [](const ColliderSet &self, const py::handle points_wo, const float tolerance) {
+          [](const ColliderSet &self, const py::handle points_wo, const float tolerance,
+             const py::handle curve_offsets) {
             const Span<vec3> p = as_float3(points_wo, "points_wo");
             const float tol = tolerance_or_default(py::float_(tolerance), 0.0f);
+            const Span<int32_t> offsets = optional_curve_offsets(curve_offsets, p.size());
             PenetrationStats stats;
             {
               py::gil_scoped_release release;
-              stats = self.penetration_stats(p, tol);
+              stats = self.penetration_stats(p, tol, offsets);
             }
-            return stats_dict(stats, tol);
+            return stats_dict(stats, tol, !offsets.is_empty());
           },
-          py::arg("points_wo"), py::arg("tolerance"),
-          "Exact penetration into all colliders; tolerance in scene units.")
+          py::arg("points_wo"), py::arg("tolerance"), py::arg("curve_offsets") = py::none(),
+          "Exact penetration into all colliders; tolerance in scene units. With the strands' "
+          "curve_offsets the roots (kinematic: one that starts inside stays inside) are left "
+          "out of penetration_max / penetration_share / points_num and reported apart: "
+          "roots_inside (roots deeper than the tolerance) and roots_penetration_max.")
       .def(
           "apply_reaction_constraint",
           [](const ColliderSet &self, const py::handle positions_wo, const py::handle velocities_wo,

@@ -1,6 +1,8 @@
 /* Bindings of native/groom: validation, metrics, the follow-head baseline. */
 #include "bindings/arrays.hh"
 
+#include <cmath>
+
 #include "core/parallel.hh"
 #include "groom/follow.hh"
 #include "groom/groom.hh"
@@ -24,6 +26,32 @@ void bind_groom(py::module_ &m)
       },
       py::arg("curve_offsets"), py::arg("positions"),
       "Raise ValueError with a sentence if the strands cannot be simulated.");
+
+  m.def(
+      "degenerate_strands",
+      [](const py::handle curve_offsets, const py::handle positions) {
+        const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+        const Span<vec3> points = as_float3(positions, "positions");
+        const std::string error = find_groom_error(offsets, points, false);
+        if (!error.empty()) {
+          fail("Invalid hair: " + error + ".");
+        }
+        py::array_t<bool> result(offsets.size() - 1);
+        const MutableSpan<uint8_t> flags(reinterpret_cast<uint8_t *>(result.mutable_data()),
+                                         offsets.size() - 1);
+        py::gil_scoped_release release;
+        find_degenerate_curves(offsets, points, flags);
+        return result;
+      },
+      py::arg("curve_offsets"), py::arg("positions"),
+      "(C,) bool: the strands with a segment shorter than min_segment_length(positions), which "
+      "a reader drops (with a warning) rather than refusing the groom.");
+
+  m.def(
+      "min_segment_length",
+      [](const py::handle positions) { return min_segment_length(as_float3(positions, "positions")); },
+      py::arg("positions"),
+      "Shortest segment a groom may have: a millionth of its bounding-box diagonal.");
 
   m.def(
       "max_relative_stretch",
@@ -67,7 +95,10 @@ void bind_groom(py::module_ &m)
            py::arg("curve_offsets"), py::arg("rest_positions_wo"), py::arg("head_to_world_rest"))
       .def(
           "step",
-          [](FollowSolver &self, const double /*frame_dt*/, const py::handle head_to_world) {
+          [](FollowSolver &self, const double frame_dt, const py::handle head_to_world) {
+            if (!(std::isfinite(frame_dt) && frame_dt > 0.0)) {
+              fail("frame_dt must be a positive number of seconds, not " + std::to_string(frame_dt));
+            }
             const mat4 head = as_matrix(head_to_world, "head_to_world");
             py::gil_scoped_release release;
             self.step(head);

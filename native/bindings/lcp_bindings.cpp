@@ -308,13 +308,25 @@ void bind_lcp(py::module_ &m)
       "of the body.")
       .def(py::init([](const py::handle groom, const py::handle solver,
                        const py::handle head_matrix, const int neighbours_num) {
-             const Span<int32_t> offsets = as_int(groom.attr("curve_offsets"), "curve_offsets");
-             const Span<vec3> points = as_float3(groom.attr("positions_wo"), "positions_wo");
+             /* Duck-typed arguments: a missing array is a TypeError naming it. */
+             const auto array = [](const py::handle owner, const char *owner_name,
+                                   const char *name) {
+               if (!py::hasattr(owner, name)) {
+                 throw py::type_error(std::string(owner_name) + " has no '" + name + "' array");
+               }
+               return owner.attr(name);
+             };
+             const py::object offsets_obj = array(groom, "groom", "curve_offsets");
+             const py::object points_obj = array(groom, "groom", "positions_wo");
+             const Span<int32_t> offsets = as_int(offsets_obj, "curve_offsets");
+             const Span<vec3> points = as_float3(points_obj, "positions_wo");
              check_groom(offsets, points);
              /* The particles: an LcpSolver, or anything with the same arrays. */
-             const py::object x_obj = solver.attr("positions"), t_obj = solver.attr("directions");
-             const py::object u_obj = solver.attr("u"), v_obj = solver.attr("v"),
-                              s_obj = solver.attr("s");
+             const py::object x_obj = array(solver, "solver", "positions"),
+                              t_obj = array(solver, "solver", "directions");
+             const py::object u_obj = array(solver, "solver", "u"),
+                              v_obj = array(solver, "solver", "v"),
+                              s_obj = array(solver, "solver", "s");
              const Span<vec3> x = as_float3(x_obj, "positions"), t = as_float3(t_obj, "directions");
              const Span<float> u = as_float(u_obj, "u"), v = as_float(v_obj, "v"),
                                s = as_float(s_obj, "s");

@@ -105,7 +105,7 @@ void bind_volume(py::module_ &m)
           grid = grid_around(head_box(positions, glm::inverse(head)),
                              cell > 0.0f ? cell :
                                            std::max(mean_segment_length(offsets, positions),
-                                                    min_segment_length),
+                                                    min_segment_length(positions)),
                              1, head);
           PointBins bins;
           bin_points(grid, positions, bins);

@@ -12,6 +12,7 @@
  * A ColliderSet is the scene's colliders; find_contact() is the call the strand and LCP
  * solvers make for every node: a few table look-ups per part, no allocation, cost independent
  * of the meshes. */
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,64 @@ struct PartMap {
     return kind == MapKind::Sphere ? sphere.find_contact_map(p_map, r_sample) :
                                      cylinder.find_contact_map(p_map, r_sample);
   }
+  /* The map kind is resolved once per batch. */
+  template<int64_t N>
+  HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b, const bool inside_only) const
+  {
+    if (kind == MapKind::Sphere) {
+      sphere.sample(b, inside_only);
+    }
+    else {
+      cylinder.sample(b, inside_only);
+    }
+  }
+};
+
+/* a where mask is all ones, b where it is 0, by the bits: GCC would turn a `take ? a : b`
+ * stored back into its own array into a branch around the store, which does not vectorise. */
+HAIRDYN_BATCH_INLINE float select_bits(const int32_t mask, const float a, const float b)
+{
+  int32_t bits_a, bits_b;
+  std::memcpy(&bits_a, &a, sizeof(float));
+  std::memcpy(&bits_b, &b, sizeof(float));
+  const int32_t bits = (bits_a & mask) | (bits_b & ~mask);
+  float result;
+  std::memcpy(&result, &bits, sizeof(float));
+  return result;
+}
+
+/* The deepest contacts found so far for a batch of world points (structure of arrays, as
+ * MapBatch): hit, depth, normal n and surface point s, world space. */
+template<int64_t N> struct ContactBatch {
+  int64_t size = 0;
+  float px[N], py[N], pz[N];
+  int32_t hit[N];
+  float depth[N], nx[N], ny[N], nz[N], sx[N], sy[N], sz[N];
+
+  void load(const Span<vec3> points_wo)
+  {
+    size = points_wo.size();
+    for (int64_t k = 0; k < size; k++) {
+      px[k] = points_wo[k].x;
+      py[k] = points_wo[k].y;
+      pz[k] = points_wo[k].z;
+      hit[k] = 0;
+      depth[k] = nx[k] = ny[k] = nz[k] = 0.0f;
+      sx[k] = px[k];
+      sy[k] = py[k];
+      sz[k] = pz[k];
+    }
+  }
+  bool read(const int64_t k, Contact &r_contact) const
+  {
+    if (!hit[k]) {
+      return false;
+    }
+    r_contact.depth = depth[k];
+    r_contact.normal_wo = vec3(nx[k], ny[k], nz[k]);
+    r_contact.surface_point_wo = vec3(sx[k], sy[k], sz[k]);
+    return true;
+  }
 };
 
 /* Points to measure a map against the exact surface: the centroids of (at most
@@ -67,6 +126,17 @@ float mean_depth_error(const Map &map, const MeshDistance &exact, const Span<vec
     }
   }
   return points_object.is_empty() ? 0.0f : float(sum / double(points_object.size()));
+}
+
+/* The per-point query of a Collider or a ColliderSet: the batched query with a batch of one. */
+template<typename Colliders>
+bool find_contact_of(const Colliders &colliders, const vec3 &p_wo, Contact &r_contact)
+{
+  ContactBatch<1> contacts;
+  contacts.load(Span<vec3>(&p_wo, 1));
+  MapBatch<1> scratch;
+  colliders.accumulate_contacts(contacts, scratch);
+  return contacts.read(0, r_contact);
 }
 
 /* A rigid or affine map between spaces, applied as linear * p + translation. */
@@ -96,28 +166,70 @@ class Collider {
   /* The deepest contact of p with any part; false when p is inside none. */
   bool find_contact(const vec3 &p_wo, Contact &r_contact) const
   {
-    bool found = false;
+    return find_contact_of(*this, p_wo, r_contact);
+  }
+
+  /* Updates each point of `contacts` that is inside a part deeper than its contact so far
+   * (the batched query: per part, one pass of each stage over the batch). */
+  template<int64_t N>
+  HAIRDYN_BATCH_INLINE void accumulate_contacts(ContactBatch<N> &contacts,
+                                                MapBatch<N> &scratch) const
+  {
+    const int64_t size = contacts.size;
+    scratch.size = size;
     for (const Part &part : parts_) {
-      MapSample sample;
-      if (!part.map.find_contact_map(part.world_to_map.apply(p_wo), sample)) {
-        continue;
+      const mat3 l = part.world_to_map.linear;
+      const vec3 t = part.world_to_map.translation;
+      for (int64_t k = 0; k < size; k++) {
+        const float x = contacts.px[k], y = contacts.py[k], z = contacts.pz[k];
+        scratch.x[k] = l[0][0] * x + l[1][0] * y + l[2][0] * z + t.x;
+        scratch.y[k] = l[0][1] * x + l[1][1] * y + l[2][1] * z + t.y;
+        scratch.z[k] = l[0][2] * x + l[1][2] * y + l[2][2] * z + t.z;
       }
-      const vec3 surface_wo = part.map_to_world.apply(sample.surface_point);
-      /* A similarity (rotation, translation, uniform scale) keeps distances and normals up to
-       * the scale; other affine maps need the lengths measured again. */
-      const float depth_wo = similarity_scale_ > 0.0f ? sample.depth * similarity_scale_ :
-                                                        glm::length(surface_wo - p_wo);
-      if (found && depth_wo <= r_contact.depth) {
-        continue;
+      part.map.sample(scratch, true);
+      if constexpr (N == 1) {
+        if (!scratch.valid[0]) {
+          continue;
+        }
       }
-      found = true;
-      r_contact.depth = depth_wo;
-      r_contact.surface_point_wo = surface_wo;
-      const vec3 normal_wo = part.normal_to_world * sample.normal;
-      r_contact.normal_wo = similarity_scale_ > 0.0f ? normal_wo * similarity_scale_ :
-                                                       glm::normalize(normal_wo);
+      const mat3 m = part.map_to_world.linear;
+      const vec3 mt = part.map_to_world.translation;
+      const mat3 nm = part.normal_to_world;
+      const float scale = similarity_scale_;
+      for (int64_t k = 0; k < size; k++) {
+        /* T in world space; a similarity (rotation, translation, uniform scale) keeps
+         * distances and normals up to the scale, other affine maps need the lengths measured
+         * again. */
+        const float d = scratch.depth[k];
+        const float mx = scratch.x[k] + d * scratch.nx[k], my = scratch.y[k] + d * scratch.ny[k],
+                    mz = scratch.z[k] + d * scratch.nz[k];
+        const float sx = m[0][0] * mx + m[1][0] * my + m[2][0] * mz + mt.x;
+        const float sy = m[0][1] * mx + m[1][1] * my + m[2][1] * mz + mt.y;
+        const float sz = m[0][2] * mx + m[1][2] * my + m[2][2] * mz + mt.z;
+        const float ex = sx - contacts.px[k], ey = sy - contacts.py[k], ez = sz - contacts.pz[k];
+        const float depth_scaled = d * scale;
+        const float depth_measured = std::sqrt(ex * ex + ey * ey + ez * ez);
+        const float depth_wo = scale > 0.0f ? depth_scaled : depth_measured;
+        const float ax = scratch.nx[k], ay = scratch.ny[k], az = scratch.nz[k];
+        const float nx = nm[0][0] * ax + nm[1][0] * ay + nm[2][0] * az;
+        const float ny = nm[0][1] * ax + nm[1][1] * ay + nm[2][1] * az;
+        const float nz = nm[0][2] * ax + nm[1][2] * ay + nm[2][2] * az;
+        const float n_length = std::sqrt(nx * nx + ny * ny + nz * nz);
+        const float n_normalise = 1.0f / (n_length > 0.0f ? n_length : 1.0f);
+        const float n_scale = scale > 0.0f ? scale : n_normalise;
+        const bool take = (scratch.valid[k] != 0) &
+                          ((contacts.hit[k] == 0) | (depth_wo > contacts.depth[k]));
+        const int32_t mask = -int32_t(take);
+        contacts.hit[k] |= int32_t(take);
+        contacts.depth[k] = select_bits(mask, depth_wo, contacts.depth[k]);
+        contacts.nx[k] = select_bits(mask, nx * n_scale, contacts.nx[k]);
+        contacts.ny[k] = select_bits(mask, ny * n_scale, contacts.ny[k]);
+        contacts.nz[k] = select_bits(mask, nz * n_scale, contacts.nz[k]);
+        contacts.sx[k] = select_bits(mask, sx, contacts.sx[k]);
+        contacts.sy[k] = select_bits(mask, sy, contacts.sy[k]);
+        contacts.sz[k] = select_bits(mask, sz, contacts.sz[k]);
+      }
     }
-    return found;
   }
 
   int64_t parts_num() const { return int64_t(parts_.size()); }
@@ -185,20 +297,24 @@ class ColliderSet {
   /* The deepest contact of p_wo with any collider; false when p_wo is inside none. */
   bool find_contact(const vec3 &p_wo, Contact &r_contact) const
   {
-    bool found = false;
+    return find_contact_of(*this, p_wo, r_contact);
+  }
+  /* The batched query over every collider (the deepest contact wins; ties keep the first). */
+  template<int64_t N>
+  HAIRDYN_BATCH_INLINE void accumulate_contacts(ContactBatch<N> &contacts,
+                                                MapBatch<N> &scratch) const
+  {
     for (const std::shared_ptr<Collider> &collider : colliders_) {
-      Contact contact;
-      if (collider->find_contact(p_wo, contact) && (!found || contact.depth > r_contact.depth)) {
-        r_contact = contact;
-        found = true;
-      }
+      collider->accumulate_contacts(contacts, scratch);
     }
-    return found;
   }
   /* The smallest collider's size in world units (for tolerances relative to collider size). */
   float size_wo() const;
-  /* Exact penetration of points into the real triangles of all colliders (deepest per point). */
-  PenetrationStats penetration_stats(Span<vec3> points_wo, float tolerance_wo) const;
+  /* Exact penetration of points into the real triangles of all colliders (deepest per point).
+   * Given the strands' curve offsets (valid for points_wo), the roots are left out of
+   * max_depth, share and points_num and reported in roots_inside and roots_depth_max. */
+  PenetrationStats penetration_stats(Span<vec3> points_wo, float tolerance_wo,
+                                     Span<int32_t> curve_offsets = {}) const;
 
  private:
   std::vector<std::shared_ptr<Collider>> colliders_;

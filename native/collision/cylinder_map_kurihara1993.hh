@@ -29,51 +29,60 @@ class CylinderMap {
    * to filled cells); false elsewhere. */
   bool evaluate_map(const vec3 &p_cyl, MapSample &r_sample) const
   {
-    return sample_map(p_cyl, false, r_sample);
+    MapBatch<1> b = single_point_batch(p_cyl);
+    sample(b, false);
+    return read_sample(b, 0, r_sample);
   }
 
   /* Inside test and contact (Kurihara 1993 §3.1): true when P is inside, with eq. 11's
    * nearest surface point T, depth |PT| along N and N. */
   bool find_contact_map(const vec3 &p_cyl, MapSample &r_sample) const
   {
-    /* Cheap rejections first: most hair nodes are far outside. */
-    if (p_cyl.x * p_cyl.x + p_cyl.z * p_cyl.z >= max_radius_sq_) {
-      return false;
-    }
-    return sample_map(p_cyl, true, r_sample);
+    MapBatch<1> b = single_point_batch(p_cyl);
+    sample(b, true);
+    return read_sample(b, 0, r_sample);
   }
 
   /* Object-space conveniences (not for the per-step path). */
   bool evaluate(const vec3 &p_object, MapSample &r_sample) const;
 
- private:
-  /* With inside_only, returns false for points outside before computing the normal. */
-  bool sample_map(const vec3 &p_cyl, const bool inside_only, MapSample &r_sample) const
+  /* The batched look-up (see MapBatch): with inside_only, valid only where P is inside. */
+  template<int64_t N>
+  HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b, const bool inside_only) const
   {
-    if (!(p_cyl.y >= y_min_ && p_cyl.y <= y_max_)) {
-      return false;
+    const float y_min = y_min_, y_max = y_max_, max_radius_sq = max_radius_sq_;
+    const float u_per_radian = u_per_radian_, v_per_unit = v_per_unit_;
+    for (int64_t k = 0; k < b.size; k++) {
+      /* (r_p, θ_p, y_p) of P; outside the height range or beyond the largest radius P is
+       * never inside. */
+      const float x = b.x[k], y = b.y[k], z = b.z[k];
+      const float r_sq = x * x + z * z;
+      b.r_p[k] = std::sqrt(r_sq);
+      b.defined[k] = (y >= y_min ? 1 : 0) & (y <= y_max ? 1 : 0) &
+                     (inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1);
+      table_.locate(b, k, fast_atan2(z, x) * u_per_radian, (y - y_min) * v_per_unit - 0.5f);
     }
-    /* (r_p, θ_p, y_p) of P. */
-    const float r_p = std::sqrt(p_cyl.x * p_cyl.x + p_cyl.z * p_cyl.z);
-    const float theta = fast_atan2(p_cyl.z, p_cyl.x);
-    float u = theta * u_per_radian_;
-    u = u < 0.0f ? u + float(table_.u_num()) : u;
-    const float v = std::min(std::max((p_cyl.y - y_min_) * v_per_unit_ - 0.5f, 0.0f),
-                             float(table_.v_num() - 1));
-    float r_q;
-    RadialTable::Stencil stencil;
-    if (!table_.lookup_radius(u, v, r_q, stencil) || (inside_only && !(r_p < r_q))) {
-      return false;
+    if constexpr (N == 1) {
+      /* A single point (the per-point calls) stops here when it cannot be inside. */
+      if (!b.defined[0]) {
+        b.valid[0] = 0;
+        return;
+      }
     }
-    const vec3 normal = RadialTable::normal(stencil);
-    /* Q: same azimuth and height as P, at radius r_q. */
-    const vec3 radial = r_p > 0.0f ? vec3(p_cyl.x, 0.0f, p_cyl.z) * (1.0f / r_p) :
-                                     vec3(1.0f, 0.0f, 0.0f);
-    const vec3 q(radial.x * r_q, p_cyl.y, radial.z * r_q);
-    finish_sample(p_cyl, q, normal, r_p < r_q, r_sample);
-    return true;
+    table_.blend(b);
+    for (int64_t k = 0; k < b.size; k++) {
+      /* Q: same azimuth and height as P, at radius r_q. */
+      const float r_p = b.r_p[k], r_q = b.r_q[k];
+      const bool off_axis = r_p > 0.0f;
+      const float inv_r = 1.0f / (off_axis ? r_p : 1.0f);
+      const float rx = b.x[k] * inv_r, rz = b.z[k] * inv_r;
+      const float radial_x = off_axis ? rx : 1.0f;
+      const float radial_z = off_axis ? rz : 0.0f;
+      finish_lane(b, k, inside_only, radial_x * r_q, b.y[k], radial_z * r_q);
+    }
   }
 
+ private:
   MapFrame frame_;
   mat4 object_to_map_{1.0f};
   RadialTable table_;

@@ -20,6 +20,13 @@ std::string find_mesh_error(const Span<vec3> vertices, const Span<ivec3> triangl
       msg << "vertex " << i << " has a position that is not a finite number";
       return msg.str();
     }
+    /* Products of coordinates (cross products, squared distances) must stay finite in single
+     * precision: beyond this the exact distance and the rays lose every digit. */
+    if (glm::any(glm::greaterThan(glm::abs(vertices[i]), vec3(max_mesh_coordinate)))) {
+      msg << "vertex " << i << " is farther than " << max_mesh_coordinate
+          << " scene units from the object's origin";
+      return msg.str();
+    }
   }
   for (int64_t t = 0; t < triangles.size(); t++) {
     const ivec3 tri = triangles[t];

@@ -21,8 +21,12 @@ struct MeshTraits : public OpenMesh::DefaultTraits {
 using TriMesh = OpenMesh::TriMesh_ArrayKernelT<MeshTraits>;
 
 /* Empty string when the arrays describe a usable triangle mesh; otherwise one sentence:
- * no faces, an index out of range, a degenerate index triple or a non-finite vertex. */
+ * no faces, an index out of range, a degenerate index triple, a non-finite vertex or one
+ * beyond max_mesh_coordinate. */
 std::string find_mesh_error(Span<vec3> vertices, Span<ivec3> triangles);
+
+/* Largest |coordinate| of a collider vertex (object units); find_mesh_error refuses more. */
+constexpr float max_mesh_coordinate = 1e9f;
 
 class ColliderMesh {
  public:

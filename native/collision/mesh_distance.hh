@@ -37,6 +37,10 @@ struct PenetrationStats {
   float share = 0.0f;       /* Share of points deeper than the tolerance, 0..1. */
   int64_t deeper_num = 0;   /* Points deeper than the tolerance. */
   int64_t points_num = 0;
+  /* With curve offsets, the strands' roots are counted apart (they are kinematic: a root that
+   * starts inside a collider stays inside, and is not the solver's penetration). */
+  int64_t roots_inside = 0;     /* Roots deeper than the tolerance. */
+  float roots_depth_max = 0.0f; /* Deepest root, scene units. */
 };
 
 /* r_depth_wo[i] = max(r_depth_wo[i], depth of points_wo[i] inside the mesh placed by

@@ -154,8 +154,15 @@ void fill_cell_from_ray(const TriangleBVH &bvh, const Span<vec3> vertices,
   if (glm::dot(normal, direction_map) < 0.0f) {
     normal = -normal;
   }
+  const float radius = hit.t * glm::length(direction_map);
+  /* A mesh at the edge of single precision (coordinates near 1e19) can give a hit at an
+   * infinite or NaN distance: such a ray describes nothing, its cell stays empty. */
+  if (!(std::isfinite(radius) && radius >= 0.0f && is_finite(normal))) {
+    r_cell = MapCell{};
+    return;
+  }
   r_cell.normal = normal;
-  r_cell.radius = hit.t * glm::length(direction_map);
+  r_cell.radius = radius;
 }
 
 }  // namespace hairdyn

@@ -41,27 +41,59 @@ struct MapSample {
   bool inside = false;    /* r_p < r_q (the comparison after eq. 10). */
 };
 
+/* The batched look-up's stages are inlined into one function, whatever the caller: the
+ * AVX2 clone of the parallel query (collider.cpp) then compiles all of them for AVX2. */
+#if defined(__GNUC__)
+#  define HAIRDYN_BATCH_INLINE inline __attribute__((always_inline))
+#else
+#  define HAIRDYN_BATCH_INLINE inline
+#endif
+
+/* Points per batched look-up: the batch's arrays (about 20 floats per point) stay in L1. */
+constexpr int64_t map_batch_size = 256;
+
+/* A batch of map look-ups as a structure of arrays, so that each stage of the look-up is one
+ * branch-free loop the compiler vectorises: (1) table coordinates and cell indices, (2) the
+ * gather of the four cells (the only scalar stage), (3) eq. 9–11. The per-point calls run the
+ * same code with N = 1. Inputs x, y, z (map space); outputs valid, inside, depth, nx, ny, nz
+ * (read only where valid). NaN or infinite inputs are never valid and never index out of the
+ * table. */
+template<int64_t N> struct MapBatch {
+  int64_t size = 0;
+  float x[N], y[N], z[N];
+  int32_t valid[N];  /* The map is defined at the point (and it is inside, for contacts). */
+  int32_t inside[N]; /* r_p < r_q. */
+  float depth[N], nx[N], ny[N], nz[N];
+  /* Between the stages. */
+  int32_t defined[N], cell[N], du[N], dv[N];
+  float r_p[N], v[N], s[N], t[N], r_q[N];
+};
+
+/* x clamped to [lo, hi], NaN to lo: both comparisons are false for NaN, so no input can give
+ * a value outside the range (and a cell index cast from it stays inside the table). */
+HAIRDYN_BATCH_INLINE float clamp_or_low(const float x, const float lo, const float hi)
+{
+  const float above = x > lo ? x : lo;
+  return above < hi ? above : hi;
+}
+
 /* atan2 to within 1e-6 rad, several times faster than std::atan2 (the query path's only
- * transcendental function). Result in (-π, π]. */
-inline float fast_atan2(const float y, const float x)
+ * transcendental function), branch-free so that it vectorises. Result in (-π, π]; 0 at the
+ * origin. */
+HAIRDYN_BATCH_INLINE float fast_atan2(const float y, const float x)
 {
   const float ax = std::abs(x), ay = std::abs(y);
-  const float big = std::max(ax, ay);
-  if (big == 0.0f) {
-    return 0.0f;
-  }
-  const float a = std::min(ax, ay) / big;
+  const float big = ax < ay ? ay : ax;
+  const float small = ay < ax ? ay : ax;
+  /* 0 / 1 at the origin: no division is left to a branch, so the loop vectorises. */
+  const float a = small / (big > 0.0f ? big : 1.0f);
   const float s = a * a;
   /* Minimax polynomial for atan on [0, 1]. */
   float r = ((((((-0.0040540580f * s + 0.0218612288f) * s - 0.0559098861f) * s +
                0.0964200441f) * s - 0.1390853351f) * s + 0.1994653599f) * s -
              0.3332985605f) * s * a + a;
-  if (ay > ax) {
-    r = 1.57079637f - r;
-  }
-  if (x < 0.0f) {
-    r = 3.14159274f - r;
-  }
+  r = ay > ax ? 1.57079637f - r : r;
+  r = x < 0.0f ? 3.14159274f - r : r;
   return y < 0.0f ? -r : r;
 }
 
@@ -73,13 +105,15 @@ struct MapCell {
 };
 static_assert(sizeof(MapCell) == 16, "one cell is 16 bytes: four cells per cache line");
 
-/* The m × n table. u (azimuth, 0 <= u < m) wraps around; v (0 <= v <= n - 1) is clamped by
- * the caller. */
+/* The m × n table. u (azimuth, 0 <= u < m) wraps around; v (0 <= v <= n - 1) is clamped. */
 class RadialTable {
  public:
   RadialTable() = default;
   RadialTable(int32_t u_num, int32_t v_num)
-      : u_num_(u_num), v_num_(v_num), cells_(size_t(u_num) * size_t(v_num))
+      : u_num_(u_num),
+        v_num_(v_num),
+        u_last_(std::nextafter(float(u_num), 0.0f)),
+        cells_(size_t(u_num) * size_t(v_num))
   {
   }
 
@@ -92,66 +126,109 @@ class RadialTable {
   float max_radius() const { return max_radius_; }
   void update_max_radius();
 
-  /* The four cells around table coordinates (u, v) and their bilinear weights. */
-  struct Stencil {
-    const MapCell *c00, *c10, *c01, *c11;
-    float w00, w10, w01, w11;
-  };
-
-  /* Bilinear look-up of the radius r_q at table coordinates (u, v) (Kurihara 1993, eq. 8–10).
-   * False when any of the four cells is empty: a query never reports a collision next to a
-   * missed ray. r_stencil is for normal(). */
-  bool lookup_radius(const float u, const float v, float &r_radius, Stencil &r_stencil) const
+  /* Stage 1 of the bilinear look-up for point k (Kurihara 1993, eq. 8 and 10): the cell
+   * i <= u < i + 1, j <= v < j + 1 and the fractions s, t. u wraps once around [0, m), v is
+   * clamped to [0, n - 1]; anything else (NaN, infinities) lands in cell (0, 0). */
+  template<int64_t N>
+  HAIRDYN_BATCH_INLINE void locate(MapBatch<N> &b, const int64_t k, float u, const float v) const
   {
-    /* eq. 8: i <= u < i + 1, j <= v < j + 1. */
-    const float u_floor = std::floor(u);
-    const float v_floor = std::floor(v);
-    int32_t i0 = int32_t(u_floor);
-    int32_t j0 = int32_t(v_floor);
-    i0 = i0 >= u_num_ ? i0 - u_num_ : (i0 < 0 ? i0 + u_num_ : i0);
-    j0 = std::min(std::max(j0, 0), v_num_ - 1);
-    const int32_t i1 = i0 + 1 == u_num_ ? 0 : i0 + 1;
-    const int32_t j1 = std::min(j0 + 1, v_num_ - 1);
-    /* eq. 10 */
-    const float s = u - u_floor;
-    const float t = v - v_floor;
-    Stencil &st = r_stencil;
-    st.c00 = &cells_[size_t(j0 * u_num_ + i0)];
-    st.c10 = &cells_[size_t(j0 * u_num_ + i1)];
-    st.c01 = &cells_[size_t(j1 * u_num_ + i0)];
-    st.c11 = &cells_[size_t(j1 * u_num_ + i1)];
-    if (std::min(std::min(st.c00->radius, st.c10->radius), std::min(st.c01->radius, st.c11->radius)) <
-        0.0f)
-    {
-      return false;
-    }
-    st.w00 = (1.0f - s) * (1.0f - t);
-    st.w10 = s * (1.0f - t);
-    st.w01 = (1.0f - s) * t;
-    st.w11 = s * t;
-    /* eq. 9 */
-    r_radius = st.c00->radius * st.w00 + st.c10->radius * st.w10 + st.c01->radius * st.w01 +
-               st.c11->radius * st.w11;
-    return true;
+    const float m = float(u_num_);
+    u = u < 0.0f ? u + m : u;
+    u = u < m ? u : u - m;
+    u = clamp_or_low(u, 0.0f, u_last_);
+    const float v_clamped = clamp_or_low(v, 0.0f, float(v_num_ - 1));
+    const int32_t i0 = int32_t(u);
+    const int32_t j0 = int32_t(v_clamped);
+    b.cell[k] = j0 * u_num_ + i0;
+    b.du[k] = i0 + 1 == u_num_ ? 1 - u_num_ : 1;
+    b.dv[k] = j0 + 1 < v_num_ ? u_num_ : 0;
+    b.s[k] = u - float(i0);
+    b.t[k] = v_clamped - float(j0);
   }
 
-  /* §3.1, step 1: N at Q by bilinear interpolation of the cells' normals, normalised. */
-  static vec3 normal(const Stencil &st)
+  /* Stage 2: the gather. Eq. 9: r_q by bilinear interpolation of the four cells' radii; §3.1
+   * step 1: N by interpolating their normals (normalised in stage 3). A point next to an
+   * empty cell is not defined: a query never reports a collision next to a missed ray. */
+  template<int64_t N> HAIRDYN_BATCH_INLINE void blend(MapBatch<N> &b) const
   {
-    const vec3 n = st.c00->normal * st.w00 + st.c10->normal * st.w10 + st.c01->normal * st.w01 +
-                   st.c11->normal * st.w11;
-    const float len_sq = glm::dot(n, n);
-    /* Opposite normals cancelling out (a thin sheet seen from both sides): any unit vector
-     * is as good, keep the first cell's. */
-    return len_sq > 1e-12f ? n * (1.0f / std::sqrt(len_sq)) : st.c00->normal;
+    /* The cells as floats (normal x, y, z, radius): indexed loads the compiler turns into
+     * gathers. */
+    const float *cells = reinterpret_cast<const float *>(cells_.data());
+    for (int64_t k = 0; k < b.size; k++) {
+      const int32_t c00 = 4 * b.cell[k], c10 = 4 * (b.cell[k] + b.du[k]);
+      const int32_t c01 = 4 * (b.cell[k] + b.dv[k]), c11 = 4 * (b.cell[k] + b.du[k] + b.dv[k]);
+      const float s = b.s[k], t = b.t[k];
+      const float w00 = (1.0f - s) * (1.0f - t), w10 = s * (1.0f - t);
+      const float w01 = (1.0f - s) * t, w11 = s * t;
+      const float r00 = cells[c00 + 3], r10 = cells[c10 + 3], r01 = cells[c01 + 3],
+                  r11 = cells[c11 + 3];
+      const float min_radius = std::min(std::min(r00, r10), std::min(r01, r11));
+      b.defined[k] &= min_radius >= 0.0f ? 1 : 0;
+      b.r_q[k] = r00 * w00 + r10 * w10 + r01 * w01 + r11 * w11;
+      const float nx = cells[c00] * w00 + cells[c10] * w10 + cells[c01] * w01 + cells[c11] * w11;
+      const float ny = cells[c00 + 1] * w00 + cells[c10 + 1] * w10 + cells[c01 + 1] * w01 +
+                       cells[c11 + 1] * w11;
+      const float nz = cells[c00 + 2] * w00 + cells[c10 + 2] * w10 + cells[c01 + 2] * w01 +
+                       cells[c11 + 2] * w11;
+      /* Opposite normals cancelling out (a thin sheet seen from both sides): any unit vector
+       * is as good, keep the first cell's. */
+      const bool cancelled = !(nx * nx + ny * ny + nz * nz > 1e-12f);
+      b.nx[k] = cancelled ? cells[c00] : nx;
+      b.ny[k] = cancelled ? cells[c00 + 1] : ny;
+      b.nz[k] = cancelled ? cells[c00 + 2] : nz;
+    }
   }
 
  private:
   int32_t u_num_ = 0;
   int32_t v_num_ = 0;
+  float u_last_ = 0.0f; /* The largest float below m. */
   std::vector<MapCell> cells_;
   float max_radius_ = 0.0f;
 };
+
+/* Stage 3's end, shared by both maps (Kurihara 1993, eq. 11): N normalised, Q given, the
+ * depth (Q - P) · N along N; valid where defined and, with inside_only, r_p < r_q. */
+template<int64_t N>
+HAIRDYN_BATCH_INLINE void finish_lane(MapBatch<N> &b, const int64_t k, const bool inside_only, const float qx,
+                        const float qy, const float qz)
+{
+  const float nx = b.nx[k], ny = b.ny[k], nz = b.nz[k];
+  const float inv = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
+  b.nx[k] = nx * inv;
+  b.ny[k] = ny * inv;
+  b.nz[k] = nz * inv;
+  const int32_t inside = b.r_p[k] < b.r_q[k] ? 1 : 0;
+  b.inside[k] = inside;
+  b.valid[k] = b.defined[k] & (inside | (inside_only ? 0 : 1));
+  /* PT = (PQ · N) N. */
+  b.depth[k] = (qx - b.x[k]) * b.nx[k] + (qy - b.y[k]) * b.ny[k] + (qz - b.z[k]) * b.nz[k];
+}
+
+/* Point k of a batch as a MapSample (T = P + depth N); false where it is not valid. */
+template<int64_t N>
+inline bool read_sample(const MapBatch<N> &b, const int64_t k, MapSample &r_sample)
+{
+  if (!b.valid[k]) {
+    return false;
+  }
+  r_sample.depth = b.depth[k];
+  r_sample.normal = vec3(b.nx[k], b.ny[k], b.nz[k]);
+  r_sample.surface_point = vec3(b.x[k], b.y[k], b.z[k]) + b.depth[k] * r_sample.normal;
+  r_sample.inside = b.inside[k] != 0;
+  return true;
+}
+
+/* A batch of one point, for the per-point calls. */
+inline MapBatch<1> single_point_batch(const vec3 &p)
+{
+  MapBatch<1> b;
+  b.size = 1;
+  b.x[0] = p.x;
+  b.y[0] = p.y;
+  b.z[0] = p.z;
+  return b;
+}
 
 /* Fills one cell from the outermost hit of the ray origin + t direction (map space; the BVH is
  * in object space, hence the frame). The normal is the hit triangle's, turned to face along
@@ -159,18 +236,5 @@ class RadialTable {
 void fill_cell_from_ray(const TriangleBVH &bvh, Span<vec3> vertices, Span<ivec3> triangles,
                         const mat4 &map_to_object, const vec3 &origin_map,
                         const vec3 &direction_map, MapCell &r_cell);
-
-/* Eq. 11 and the inside test, once the map has found Q (on the ray from `base` through P, at
- * radius r_q) and N: fills r_sample for the point p (map space). */
-inline void finish_sample(const vec3 &p, const vec3 &q, const vec3 &normal, const bool inside,
-                          MapSample &r_sample)
-{
-  /* Kurihara 1993, eq. 11: PT = (PQ · N) N. */
-  const float depth = glm::dot(q - p, normal);
-  r_sample.depth = depth;
-  r_sample.normal = normal;
-  r_sample.surface_point = p + depth * normal;
-  r_sample.inside = inside;
-}
 
 }  // namespace hairdyn

@@ -26,59 +26,85 @@ class SphereMap {
   /* Signed depth at p (map space, relative to the centre) next to filled cells. */
   bool evaluate_map(const vec3 &p_sph, MapSample &r_sample) const
   {
-    return sample_map(p_sph, false, r_sample);
+    MapBatch<1> b = single_point_batch(p_sph);
+    sample(b, false);
+    return read_sample(b, 0, r_sample);
   }
 
   /* Inside test and eq. 11 contact, as CylinderMap::find_contact_map. */
   bool find_contact_map(const vec3 &p_sph, MapSample &r_sample) const
   {
-    if (glm::dot(p_sph, p_sph) >= max_radius_sq_) {
-      return false;
-    }
-    return sample_map(p_sph, true, r_sample);
+    MapBatch<1> b = single_point_batch(p_sph);
+    sample(b, true);
+    return read_sample(b, 0, r_sample);
   }
 
   bool evaluate(const vec3 &p_object, MapSample &r_sample) const;
 
- private:
-  bool sample_map(const vec3 &p_sph, const bool inside_only, MapSample &r_sample) const
+  /* The batched look-up (see MapBatch): with inside_only, valid only where P is inside. */
+  template<int64_t N>
+  HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b, const bool inside_only) const
   {
-    const float rho_xz_sq = p_sph.x * p_sph.x + p_sph.z * p_sph.z;
-    const float rho_xz = std::sqrt(rho_xz_sq);
-    const float r_p = std::sqrt(rho_xz_sq + p_sph.y * p_sph.y);
-    float u = fast_atan2(p_sph.z, p_sph.x) * u_per_radian_;
-    u = u < 0.0f ? u + float(table_.u_num()) : u;
-    const float phi = fast_atan2(rho_xz, p_sph.y);
+    const float max_radius_sq = max_radius_sq_;
+    const float u_per_radian = u_per_radian_, v_per_radian = v_per_radian_;
     const float v_last = float(table_.v_num() - 1);
-    const float v = phi * v_per_radian_ - 0.5f;
-    float r_q;
-    RadialTable::Stencil stencil;
-    if (!table_.lookup_radius(u, std::min(std::max(v, 0.0f), v_last), r_q, stencil)) {
-      return false;
+    for (int64_t k = 0; k < b.size; k++) {
+      const float x = b.x[k], y = b.y[k], z = b.z[k];
+      const float rho_xz_sq = x * x + z * z;
+      const float r_sq = rho_xz_sq + y * y;
+      b.r_p[k] = std::sqrt(r_sq);
+      b.defined[k] = inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1;
+      /* θ around the pole axis, φ from it. */
+      const float v = fast_atan2(std::sqrt(rho_xz_sq), y) * v_per_radian - 0.5f;
+      b.v[k] = v;
+      table_.locate(b, k, fast_atan2(z, x) * u_per_radian, v);
     }
-    /* Between the first (last) row and the pole: w = 1 at the pole. */
-    const bool near_pole = v < 0.0f || v > v_last;
-    const MapCell &pole = v < 0.0f ? north_ : south_;
-    const float w = v < 0.0f ? -2.0f * v : 2.0f * (v - v_last);
-    if (near_pole) {
-      if (pole.radius < 0.0f) {
-        return false;
+    if constexpr (N == 1) {
+      /* A single point (the per-point calls) stops here when it cannot be inside. */
+      if (!b.defined[0]) {
+        b.valid[0] = 0;
+        return;
       }
-      r_q += w * (pole.radius - r_q);
     }
-    if (inside_only && !(r_p < r_q)) {
-      return false;
+    table_.blend(b);
+    const MapCell north = north_, south = south_;
+    for (int64_t k = 0; k < b.size; k++) {
+      /* Between the first (last) row and the pole: w = 1 at the pole. */
+      const float v = b.v[k];
+      const bool is_north = v < 0.0f;
+      const bool near_pole = is_north | (v > v_last);
+      const float w_north = -2.0f * v, w_south = 2.0f * (v - v_last);
+      const float w = is_north ? w_north : w_south;
+      const float pole_radius = is_north ? north.radius : south.radius;
+      b.defined[k] &= (!near_pole | (pole_radius >= 0.0f)) ? 1 : 0;
+      const float r_q = b.r_q[k];
+      const float r_q_pole = r_q + w * (pole_radius - r_q);
+      b.r_q[k] = near_pole ? r_q_pole : r_q;
+      /* Near a pole, the row's normal (normalised) blended toward the pole's; finish_lane
+       * normalises. */
+      const float nx = b.nx[k], ny = b.ny[k], nz = b.nz[k];
+      const float inv = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
+      const float mx = nx * inv, my = ny * inv, mz = nz * inv;
+      const float px = is_north ? north.normal.x : south.normal.x;
+      const float py = is_north ? north.normal.y : south.normal.y;
+      const float pz = is_north ? north.normal.z : south.normal.z;
+      const float bx = mx + w * (px - mx), by = my + w * (py - my), bz = mz + w * (pz - mz);
+      b.nx[k] = near_pole ? bx : nx;
+      b.ny[k] = near_pole ? by : ny;
+      b.nz[k] = near_pole ? bz : nz;
+      /* Q: same direction from the centre as P, at radius r_q. */
+      const float r_p = b.r_p[k];
+      const bool off_centre = r_p > 0.0f;
+      const float inv_r = 1.0f / (off_centre ? r_p : 1.0f);
+      const float ux = b.x[k] * inv_r, uy = b.y[k] * inv_r, uz = b.z[k] * inv_r;
+      const float dx = off_centre ? ux : 0.0f;
+      const float dy = off_centre ? uy : 1.0f;
+      const float dz = off_centre ? uz : 0.0f;
+      finish_lane(b, k, inside_only, dx * b.r_q[k], dy * b.r_q[k], dz * b.r_q[k]);
     }
-    vec3 normal = RadialTable::normal(stencil);
-    if (near_pole) {
-      normal = glm::normalize(normal + w * (pole.normal - normal));
-    }
-    /* Q: same direction from the centre as P, at radius r_q. */
-    const vec3 direction = r_p > 0.0f ? p_sph * (1.0f / r_p) : vec3(0.0f, 1.0f, 0.0f);
-    finish_sample(p_sph, direction * r_q, normal, r_p < r_q, r_sample);
-    return true;
   }
 
+ private:
   MapFrame frame_;
   mat4 object_to_map_{1.0f};
   RadialTable table_;

@@ -216,7 +216,7 @@ HairShell::HairShell(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
   const float cell_size = params.shell_cell_size > 0.0f ?
                               params.shell_cell_size :
                               4.0f * std::max(mean_segment_length(curve_offsets, rest_positions_wo),
-                                              min_segment_length);
+                                              min_segment_length(rest_positions_wo));
   /* Room outside the hair for the blurred density to fall below the threshold. */
   grid_ = grid_around(head_box(rest_positions_wo, world_to_head), cell_size,
                       params.shell_blur + 2, head_to_world);

@@ -67,7 +67,7 @@ void VolumePass::apply(const SubstepState &state)
     cell_size_ = params_.cell_size > 0.0f ?
                      params_.cell_size :
                      std::max(mean_segment_length(state.curve_offsets, state.positions_wo),
-                              min_segment_length);
+                              min_segment_length(state.positions_wo));
   }
   const mat4 head_to_world = rigid_head_to_world(state.head_to_world);
   const HeadBox hair_box = head_box(state.positions_wo, glm::inverse(head_to_world));

@@ -25,8 +25,11 @@ class SweptSpheresAttached(Attached):
             self.hair_hair.reset_stats()
         if self.colliders is not None:
             share = self.native.segment_penetration_share(
-                self.groom.curve_offsets, solver.positions, self.colliders.set,
-                self.colliders.tolerance_wo())
+                self.groom.curve_offsets,
+                solver.positions,
+                self.colliders.set,
+                self.colliders.tolerance_wo(),
+            )
             self.cutting += share
             self.segments += 1
         self.positions = solver.positions
@@ -37,8 +40,11 @@ class SweptSpheresAttached(Attached):
             figures.update(
                 hair_hair_ms=float(np.median(self.ms)) if self.ms else 0.0,
                 hair_hair_pairs=int(np.median(self.pairs)) if self.pairs else 0,
-                crossings=int(self.native.count_crossings(
-                    self.groom.curve_offsets, self.positions, None, self.thickness)),
+                crossings=int(
+                    self.native.count_crossings(
+                        self.groom.curve_offsets, self.positions, None, self.thickness
+                    )
+                ),
             )
         if self.colliders is not None:
             figures["segment_penetration_share"] = self.cutting / max(self.segments, 1)
@@ -60,8 +66,9 @@ def attach(solver, build):
         solver.add_pass(body)
         if params.body_collision == BODY_SWEPT:
             solver.set_colliders(None, colliders.params)
-    return SweptSpheresAttached(build.native, hair_hair, body, colliders, build.groom,
-                                params.thickness)
+    return SweptSpheresAttached(
+        build.native, hair_hair, body, colliders, build.groom, params.thickness
+    )
 
 
 EXTENSION = Extension(

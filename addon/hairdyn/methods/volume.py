@@ -64,8 +64,10 @@ class VolumeAttached(Attached):
     def report(self):
         if self.volume_pass is None:
             return {}
-        figures = {"volume_ms": float(np.median(self.ms)) if self.ms else 0.0,
-                   "density_max": float(self.density_max)}
+        figures = {
+            "volume_ms": float(np.median(self.ms)) if self.ms else 0.0,
+            "density_max": float(self.density_max),
+        }
         if self.volume_pass.has_target:
             figures["target_error"] = float(self.volume_pass.target_error)
         return figures

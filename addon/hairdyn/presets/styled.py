@@ -6,6 +6,7 @@
 # this preset still droops, as gelled long hair does.
 # cpp_tests/test_strands_articulated.cpp (StyledPresetHoldsASpikyCrown) reads this file.
 import bpy
+
 settings = bpy.context.object.hairdyn
 
 settings.method = 'STRANDS'
