@@ -1,6 +1,8 @@
 """The per-frame record beside a bake: rows by frame, a CSV and a PNG plot; its summary
 equals the bake report's figures when fed by the bake's own figures."""
 
+from pathlib import Path
+
 import bpy
 import numpy as np
 import pytest
@@ -77,8 +79,9 @@ def test_kinetic_energy_is_half_the_sum_of_squared_speeds():
 
 
 def test_record_of_a_bake_matches_its_report(open_fixture, tmp_path):
-    """Driven frame by frame the way the bake loop drives it: the record's summary equals the
-    report's ms_per_frame, stretch_max and penetration_share."""
+    """The bake loop records every frame beside the cache: the record's summary equals the
+    report's ms_per_frame, stretch_max and penetration_share, and a resumed bake keeps the
+    rows of the frames it keeps."""
     from hairdyn import bake, cli
 
     open_fixture("head_shake.blend")
@@ -87,31 +90,26 @@ def test_record_of_a_bake_matches_its_report(open_fixture, tmp_path):
     hair.hairdyn.frame_start, hair.hairdyn.frame_end = 1, 8
     cli.apply_settings(hair.hairdyn, ["method=strands"])
     runner = bake.start_bake(bpy.context, hair)
-    record = frame_record.start(runner.cache.directory)
     while not runner.done:
-        frame, ms = runner.advance()
-        sim = runner.simulation
-        penetration = sim.penetration()
-        record.add(
-            frame,
-            {
-                "ms": ms,
-                "stretch": sim.stretch(),
-                "penetration_share": penetration["deeper_num"] / penetration["points_num"]
-                if penetration
-                else 0.0,
-                "kinetic_energy": frame_record.kinetic_energy(sim.velocities),
-                "contacts": getattr(sim.method.solver, "contacts_num", 0),
-            },
-        )
+        runner.advance()
     report = bake.finish_bake(runner)
-    png = record.finish()
+    png = Path(report["frame_record"])
     assert png.parent == runner.cache.directory and png.is_file()
+    record = frame_record.start(runner.cache.directory, resume=True)
     summary = record.summary()
     assert summary["frames"] == report["frames"] == 8
     assert summary["ms_per_frame"] == pytest.approx(report["ms_per_frame"])
     assert summary["stretch_max"] == pytest.approx(report["stretch_max"])
     assert summary["penetration_share"] == pytest.approx(report["penetration_share"], abs=1e-12)
-    assert record.table()["kinetic_energy"].max() > 0.0  # the head shakes the hair
+    table = record.table()
+    assert table["kinetic_energy"].max() > 0.0  # the head shakes the hair
+    assert table["contacts"].max() > 0  # it touches the head
+    runner = bake.start_bake(bpy.context, hair, resume_after=5)
+    while not runner.done:
+        runner.advance()
+    bake.finish_bake(runner)
+    resumed = frame_record.read(runner.cache.directory / frame_record.CSV_NAME)
+    assert sorted(resumed) == list(range(1, 9))
+    assert all(resumed[f] == record.rows[f] for f in range(1, 6))  # kept, not re-recorded
     bpy.context.view_layer.objects.active = hair
     assert bpy.ops.hairdyn.open_frame_record.poll()

@@ -2,7 +2,7 @@
 # Installs everything hairdyn needs on a fresh Debian 12 machine; quick when all is present.
 #   Debian packages (apt-get): Blender 3.4, the C++ toolchain and libraries, Xvfb, ...
 #   .venv (pip, pinned in scripts/requirements-bpy.txt): the newest bpy wheel that installs
-#   for this machine's CPython 3.11, with numpy and pytest.
+#   for this machine's CPython 3.11, with numpy, pytest and ruff (the style check).
 #   .venv313 (pip, pinned in scripts/requirements-bpy313.txt), only where a CPython 3.13 exists
 #   (on PATH or under pyenv): bpy 5.2 (Blender 5.1/5.2 run Python 3.13), numpy, pytest, the
 #   pybind11 the 3.13 module is built with, and Dask for `cli.py wedge`.
@@ -14,7 +14,8 @@ APT_PACKAGES=(
   libglm-dev libopenmesh-dev libeigen3-dev pybind11-dev
   python3-dev python3-venv python3-numpy python3-pytest
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3-distributed
+  python3-distributed python3-openvdb
+  clang-format
   xvfb xauth
 )
 

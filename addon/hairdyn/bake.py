@@ -7,7 +7,7 @@ from pathlib import Path
 
 import bpy
 
-from . import properties
+from . import frame_record, properties
 from .cache import Cache
 from .errors import HairdynError
 from .outputs import STRANDS
@@ -73,7 +73,7 @@ def start_bake(context, hair_obj, resume_after=None):
                 "start, or restore them"
             )
         last = cache.prepare_resume(resume_after)
-        return Runner(
+        runner = Runner(
             context,
             hair_obj,
             cache.manifest["frame_start"],
@@ -81,6 +81,8 @@ def start_bake(context, hair_obj, resume_after=None):
             cache=cache,
             resume_from=last,
         )
+        runner.record = frame_record.start(directory, resume=True)
+        return runner
     runner = Runner(context, hair_obj, settings.frame_start, settings.frame_end)
     streams = runner.simulation.streams()
     strands = streams.pop(STRANDS)
@@ -100,12 +102,14 @@ def start_bake(context, hair_obj, resume_after=None):
         },
         rest_positions=runner.simulation.groom.positions_wo,
     )
+    runner.record = frame_record.start(directory)
     return runner
 
 
 def finish_bake(runner):
     """Records the bake's figures in its manifest; returns the report."""
     report = runner.report()
+    report["frame_record"] = str(runner.record.finish())  # frame_record.csv and its plot
     manifest = runner.cache.manifest
     manifest["complete"] = runner.cache.last_contiguous_frame() == manifest["frame_end"]
     manifest["report"] = report

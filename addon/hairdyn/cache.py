@@ -236,11 +236,13 @@ class Cache:
                              f"({error})") from None
 
     def free(self):
-        """Removes every file of this cache (frames, streams, topology, manifest)."""
+        """Removes every file of this cache (frames, streams, topology, manifest) and the
+        bake's frame record beside them (frame_record.csv and .png)."""
         if not self.directory.is_dir():
             return
-        for path in self.directory.glob("*.npy"):
-            path.unlink(missing_ok=True)
+        for pattern in ("*.npy", "frame_record.*"):
+            for path in self.directory.glob(pattern):
+                path.unlink(missing_ok=True)
         self.manifest_path(self.directory).unlink(missing_ok=True)
 
     def _save_array(self, name, array):

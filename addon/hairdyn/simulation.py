@@ -12,7 +12,7 @@ import time
 import bpy
 import numpy as np
 
-from . import bridge, colliders, methods, native, outputs
+from . import bridge, colliders, frame_record, methods, native, outputs
 from .errors import HairdynError
 from .methods.base import Build, Stream
 from .outputs import STRAND_OUTPUT, STRANDS
@@ -208,6 +208,7 @@ class Runner:
         self.step_ms, self.collision_ms, self.nan_frames, self.stretch_max = [], [], 0, 0.0
         self.penetration_max, self.deeper_num, self.checked_num = 0.0, 0, 0
         self.roots_inside = 0
+        self.record = None  # a bake's FrameRecord (bake.start_bake), one row per frame
         if resume_from is not None:
             # Solvers carry state the cache does not hold (angles, the head's motion), so a
             # resumed bake re-simulates the frames it keeps, without writing them: the same
@@ -246,13 +247,25 @@ class Runner:
         if self.simulation.nonfinite_points():
             self.nan_frames += 1
             return frame, ms
-        self.stretch_max = max(self.stretch_max, self.simulation.stretch())
+        stretch = self.simulation.stretch()
+        self.stretch_max = max(self.stretch_max, stretch)
         penetration = self.simulation.penetration()
         if penetration is not None:
             self.penetration_max = max(self.penetration_max, penetration["penetration_max"])
             self.deeper_num += penetration["deeper_num"]
             self.checked_num += penetration["points_num"]
             self.roots_inside = max(self.roots_inside, penetration["roots_inside"])
+        if self.record is not None:
+            self.record.add(
+                frame,
+                {
+                    "ms": ms,
+                    "penetration_share": penetration["penetration_share"] if penetration else 0.0,
+                    "stretch": stretch,
+                    "kinetic_energy": frame_record.kinetic_energy(self.simulation.velocities),
+                    "contacts": self.simulation.method.contacts_num(),
+                },
+            )
         frame_data = self.simulation.frame()
         if self.cache is not None:
             self.cache.write_frame(

@@ -120,6 +120,11 @@ class Method:
         """Its own figures for the run's report."""
         return {}
 
+    def contacts_num(self):
+        """Points its collision response touched in the last step (0 for a method that does
+        not count them); the frame record's `contacts`."""
+        return 0
+
 
 def nearest(points, targets, k=1, chunk=1024):
     """The k targets nearest to each point (brute force in chunks): indices and distances,

@@ -164,6 +164,9 @@ class Strands(Method):
     def report(self):
         return {k: v for item in self.attached for k, v in item.report().items()}
 
+    def contacts_num(self):
+        return int(self.solver.contacts_num)
+
     @property
     def positions(self):
         return self.solver.positions
