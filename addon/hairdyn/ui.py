@@ -48,6 +48,8 @@ def bake_status(obj):
                 f", penetration {report['penetration_max'] * 1000:.2f} mm "
                 f"({report['penetration_share'] * 100:.2f}%)"
             )
+        if "lod_error" in report:
+            text += f", lod_error {report['lod_error'] * 100:.2f}%"
     return text
 
 
