@@ -130,9 +130,18 @@ Strand straight(const vec3 &root, const vec3 &direction, const float length, con
 
 /* Material with Γ = c g L³ / EI = `gamma` for a strand of `length`, human-hair radius and
  * density: E = 4 ρ g L³ / (Γ r²). */
-StrandParams material_for_gamma(const double gamma, const double length)
+/* The articulated model with its default material (the product's default model is
+ * kurihara1993). */
+StrandParams articulated()
 {
   StrandParams params;
+  params.model = StrandModel::Articulated;
+  return params;
+}
+
+StrandParams material_for_gamma(const double gamma, const double length)
+{
+  StrandParams params = articulated();
   params.youngs_modulus = float(4.0 * params.hair_density * 9.81 * length * length * length /
                                 (gamma * double(params.strand_radius) * params.strand_radius));
   return params;
@@ -189,7 +198,7 @@ namespace {
  * damping: a chain of rods. */
 StrandParams chain_params()
 {
-  StrandParams params;
+  StrandParams params = articulated();
   params.youngs_modulus = 1e3f;
   params.bending_damping = 0.0f;
   params.air_drag = 0.0f;
@@ -289,7 +298,7 @@ TEST(StrandsArticulated, HeadShakeLooksTheSameAt8And32Segments)
   /* Same material (the defaults: human hair, Γ ≈ 250 at 0.3 m, a swinging chain) cut into 8
    * and 32 segments: the tips follow the same path within 5% of L (RMS over the frames). The
    * kurihara1993 model, for contrast, does not converge: its paths differ by far more. */
-  StrandParams params;
+  StrandParams params = articulated();
   const double articulated = rms_distance(head_shake_tip_path(params, 8),
                                           head_shake_tip_path(params, 32));
   EXPECT_LT(articulated, 0.05 * 0.3);
@@ -489,7 +498,7 @@ TEST(StrandsArticulated, StyledPresetHoldsASpikyCrown)
   const StrandParams styled = params_from_preset(preset_path("styled.py"));
   EXPECT_EQ(styled.model, StrandModel::Articulated);
   EXPECT_LT(worst_tip_error(styled), 0.05f);
-  EXPECT_GT(worst_tip_error(StrandParams()), 0.5f) << "loose hair should droop";
+  EXPECT_GT(worst_tip_error(articulated()), 0.5f) << "loose hair should droop";
 }
 
 TEST(StrandsArticulated, KuriharaPresetKeepsTheKuriharaModel)
@@ -501,7 +510,7 @@ TEST(StrandsArticulated, GammaOfRealHair)
 {
   /* Γ = c g L³ / EI = 4 ρ g L³ / (E r²) for a round strand: human hair (E 3.5 GPa, r 40 µm,
    * 1300 kg/m³) 0.3 m long: 4·1300·9.81·0.027 / (3.5e9 · 1.6e-9) = 245.9. */
-  StrandParams params;
+  StrandParams params = articulated();
   EXPECT_NEAR(params.gamma(0.3), 245.9, 0.5);
   EXPECT_NEAR(params.gamma(0.15) * 8.0, params.gamma(0.3), 1e-6 * params.gamma(0.3));
   /* The hinge springs are EI over the hinge's share of the strand. */

@@ -60,8 +60,9 @@ def test_generated_group_matches_the_native_struct(struct_name, empty_scene):
         if field["display_scale"] != 1.0 and field["unit"]:
             assert field["unit"] in prop.description, where  # the SI unit too
         assert prop.name.startswith(field["label"] or field["name"].replace("_", " ").title())
-        if field["symbol"]:
-            assert prop.name.endswith(f"({field['symbol']})"), where
+        if field["symbol"]:  # in the tooltip, not the label (issue 17: labels fit)
+            assert prop.description.startswith((field["symbol"] + ",", field["symbol"] + ":")), where
+            assert f"({field['symbol']})" not in prop.name, where
         if field["choices"]:
             choices = field["choices"].split(",")
             assert prop.type == 'ENUM', where

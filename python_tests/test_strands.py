@@ -104,10 +104,13 @@ def test_wind_presses_hair_against_the_head(open_fixture, use_collision):
     stats = check.set.penetration_stats(runner.simulation.positions,
                                         0.01 * head_size(bpy.data.objects["Body"]))
     share = stats["deeper_num"] / stats["points_num"]
+    contacts = runner.simulation.method.contacts_num()  # the frame record's `contacts`
     if use_collision:
         assert share <= 0.005, stats
+        assert contacts > 0
     else:
         assert share > 0.02, stats
+        assert contacts == 0
 
 
 def test_child_hairs_follow_their_guides(open_fixture):

@@ -22,7 +22,7 @@ def test_panel_in_a_real_window(fixture, obj, artifacts, tmp_path):
     out_json = tmp_path / "ui.json"
     screenshot = artifacts / f"ui_panel_{obj.lower()}.png"
     screenshot.unlink(missing_ok=True)
-    command = [xvfb_run, "-a", "-s", "-screen 0 1280x800x24", blender, "--factory-startup",
+    command = [xvfb_run, "-a", "-s", "-screen 0 1920x1080x24", blender, "--factory-startup",
                str(FIXTURES / fixture), "--python", str(UI_CHECK), "--", obj, str(out_json),
                str(screenshot), str(tmp_path / "cache")]
     # Python's copy of the environment: bpy 5.2 sets OCIO to its own colour config (a format
@@ -33,6 +33,10 @@ def test_panel_in_a_real_window(fixture, obj, artifacts, tmp_path):
     result = json.loads(out_json.read_text())
     assert result["error"] is None, result
     assert result["draw_calls"] > 0
+    # Issue 17: every label of every method's sections fits the default properties editor.
+    print("properties editor", result["properties_width_px"], "px, label column",
+          round(result["label_column_px"]), "px, widest label", result["widest_label"])
+    assert result["cut_labels"] == {}, result["cut_labels"]
     assert result["simulate"] == ["FINISHED"]
     assert result["bake_invoke"] == ["RUNNING_MODAL"]  # the modal bake, as from the button
     assert result["baked_frames"] == 10

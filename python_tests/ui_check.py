@@ -58,12 +58,82 @@ def show_panel():
     return None
 
 
+class _Recorder:
+    """A stand-in UILayout that records the label text of every property a panel draws."""
+
+    def __init__(self, labels):
+        self.labels = labels
+        self.active = self.enabled = self.use_property_split = True
+
+    def prop(self, data, name, text=None, **_):
+        label = data.bl_rna.properties[name].name if text is None else text
+        if label:
+            self.labels.add(label)
+
+    def prop_search(self, data, name, *_args, text=None, **_kwargs):
+        self.prop(data, name, text=text)
+
+    def row(self, **_):
+        return self
+
+    column = split = box = row
+
+    def operator(self, *_args, **_kwargs):
+        return self
+
+    def label(self, **_):
+        pass
+
+    def template_list(self, *_args, **_kwargs):
+        pass
+
+
+def label_width(text):
+    """Pixels the properties editor's widget font draws `text` in, at this window's scale."""
+    import blf
+
+    points = bpy.context.preferences.ui_styles[0].widget_label.points
+    scale = bpy.context.preferences.system.ui_scale
+    try:
+        blf.size(0, points * scale)
+    except TypeError:  # Blender 3.x: size(fontid, size, dpi)
+        blf.size(0, int(round(points * scale)), 72)
+    return blf.dimensions(0, text)[0]
+
+
+def cut_labels(region):
+    """Labels of every method's sections that do not fit the label column of a
+    use_property_split layout in this region: Blender gives that column 40% of the layout's
+    width (UI_ITEM_PROP_SEP_DIVIDE), after the panel's margins and a sub-panel's indent."""
+    from hairdyn import methods, ui
+
+    scale = bpy.context.preferences.system.ui_scale
+    available = 0.4 * (region.width - 2 * 20 * scale) - 8 * scale
+    labels = set()
+    settings = bpy.data.objects[object_name].hairdyn
+    for method in methods.all_methods():
+        settings.method = method.identifier
+        for panel in ui.panel_classes():
+            if hasattr(panel, "draw_settings"):
+                panel.draw_settings(None, _Recorder(labels), settings)
+    widths = {label: label_width(label) for label in sorted(labels)}
+    result["label_column_px"] = available
+    result["widest_label"] = max(widths.items(), key=lambda item: item[1])
+    result["label_widths"] = widths
+    return {label: width for label, width in widths.items() if width > available}
+
+
 def screenshot():
     try:
         window, area = properties_area()
         with bpy.context.temp_override(window=window, screen=window.screen, area=area):
             bpy.ops.screen.screenshot(filepath=out_png)
         result["steps"].append("screenshot")
+        region = next(r for r in area.regions if r.type == 'WINDOW')
+        result["properties_width_px"] = region.width
+        method = bpy.data.objects[object_name].hairdyn.method
+        result["cut_labels"] = cut_labels(region)
+        bpy.data.objects[object_name].hairdyn.method = method
         obj = bpy.data.objects[object_name]
         with bpy.context.temp_override(window=window, screen=window.screen, area=area,
                                        object=obj):

@@ -90,7 +90,7 @@ classes = (
     operators.HAIRDYN_OT_bake,
     operators.HAIRDYN_OT_free_bake,
     export.HAIRDYN_OT_export_bake,
-    frame_record.HAIRDYN_OT_open_frame_record,
+    operators.HAIRDYN_OT_open_frame_record,
     io_import.HAIRDYN_OT_import_tfx,
     io_import.HAIRDYN_OT_import_cem_hair,
     operators.HAIRDYN_OT_collider_add,

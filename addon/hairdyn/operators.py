@@ -176,6 +176,44 @@ class HAIRDYN_OT_free_bake(bpy.types.Operator):
         return {'FINISHED'}
 
 
+class HAIRDYN_OT_open_frame_record(bpy.types.Operator):
+    """Open the plot of the bake's per-frame record (ms, penetration, stretch, energy, contacts)"""
+
+    bl_idname = "hairdyn.open_frame_record"
+    bl_label = "Open Frame Record"
+    bl_options = {'REGISTER'}
+
+    @staticmethod
+    def plot_path(context):
+        from . import bake, bridge, frame_record
+        from .errors import HairdynError
+
+        if not bridge.is_hair_object(context.object):
+            return None
+        try:
+            path = bake.cache_directory(context.object) / frame_record.PNG_NAME
+        except HairdynError:
+            return None
+        return path if path.is_file() else None
+
+    @classmethod
+    def poll(cls, context):
+        return cls.plot_path(context) is not None
+
+    def execute(self, context):
+        path = self.plot_path(context)
+        image = bpy.data.images.load(str(path), check_existing=True)
+        image.reload()
+        for area in context.screen.areas if context.screen else ():
+            if area.type == 'IMAGE_EDITOR':
+                area.spaces.active.image = image
+                break
+        else:
+            bpy.ops.wm.path_open(filepath=str(path))
+        self.report({'INFO'}, f"Frame record: {path}")
+        return {'FINISHED'}
+
+
 class HAIRDYN_OT_collider_add(bpy.types.Operator):
     """Add a collider slot (pick the mesh in the list)"""
 

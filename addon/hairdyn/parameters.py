@@ -40,8 +40,9 @@ def shown_fields(params_class):
 
 
 def label(field):
-    text = field["label"] or field["name"].replace("_", " ").title()
-    return f"{text} ({field['symbol']})" if field["symbol"] else text
+    """The panel label: short enough for the default properties editor (the paper's symbol
+    is in the tooltip)."""
+    return field["label"] or field["name"].replace("_", " ").title()
 
 
 def tooltip(field):

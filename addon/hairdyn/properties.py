@@ -127,7 +127,7 @@ class HairdynSettings(bpy.types.PropertyGroup):
         description="Load the baked frame into the output objects whenever the frame changes",
     )
     use_live: BoolProperty(
-        name="Simulate on Playback",
+        name="Live Playback",
         default=True,
         description="Where no frame is baked, simulate while the animation plays: restart at "
         "the start frame, step when the frame advances by one (like cloth)",

@@ -86,7 +86,7 @@ class HAIRDYN_PT_main(_HairdynPanel, bpy.types.Panel):
         row.operator("hairdyn.free_bake", icon='TRASH', text="")
         row = layout.row()
         row.enabled = ok
-        row.operator("hairdyn.simulate", icon='PLAY')
+        row.operator("hairdyn.simulate", icon='PLAY', text="Simulate")
         row.operator("hairdyn.export_bake", icon='EXPORT')  # greyed out where no exporter exists
         row.operator("hairdyn.open_frame_record", icon='GRAPH', text="")
 

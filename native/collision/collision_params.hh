@@ -80,7 +80,7 @@ struct CollisionParams {
            .soft(0.0, 2.0));
     fn(&CollisionParams::projection_tolerance,
        ParamInfo{"projection_tolerance", "", "", 0.0, 1.0,
-                 "Nodes deeper than this share of the collider's size (bounding-box diagonal) are put back on the surface (Ward & Lin 2003 §5.5)"});
+                 "Nodes deeper than this share of the collider's size (bounding-box diagonal) are put back on the surface (Ward & Lin 2003 §5.5)"}.labeled("Projection"));
     fn(&CollisionParams::penetration_tolerance,
        ParamInfo{"penetration_tolerance", "", "", 0.0, 1.0,
                  "Depth, as a share of the collider's size (bounding-box diagonal), counted as penetration in the report"}

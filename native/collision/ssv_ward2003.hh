@@ -123,7 +123,7 @@ struct SweptSphereParams {
        ParamInfo{"hair_hair", "", "", 0.0, 1.0,
                  "Hair–hair collision: every segment a line swept sphere on a grid, overlapping "
                  "pairs pushed apart or moved together (Ward & Lin 2003 §5.3)"}
-           .labeled("Hair–Hair (Ward & Lin 2003)"));
+           .labeled("Hair–Hair"));
     fn(&SweptSphereParams::thickness,
        ParamInfo{"thickness", "r", "m", 0.0, 0.1,
                  "Radius of each strand segment's swept sphere where the hair has no radius "
@@ -136,7 +136,7 @@ struct SweptSphereParams {
                  "Overlapping segments closer to parallel than this angle share their average "
                  "velocity instead of being pushed apart (Ward & Lin 2003 §5.3)"}
            .shown_as(180.0 / M_PI, "°")
-           .soft(0.0, 0.7853982));
+           .soft(0.0, 0.7853982).labeled("Parallel Angle"));
     fn(&SweptSphereParams::push_strength,
        ParamInfo{"push_strength", "", "", 0.0, 1.0,
                  "Share of the overlap removed per substep, half on each segment (Ward & Lin "
@@ -156,7 +156,7 @@ struct SweptSphereParams {
                  "Segments within this distance of a collider keep no velocity into it (Ward & "
                  "Lin 2003 §5.4)"}
            .shown_as(1e3, "mm")
-           .soft(0.0, 0.01));
+           .soft(0.0, 0.01).labeled("Max Distance"));
   }
 };
 

@@ -83,10 +83,10 @@ struct LcpParams {
                  "Hair length where the length map is 1 (§3.2)"});
     fn(&LcpParams::root_tangent_weight,
        ParamInfo{"root_tangent_weight", "w_t", "", 0.0, 100.0,
-                 "Tangent weight of the root direction, eq. 4 (large: hair lies down)"});
+                 "Tangent weight of the root direction, eq. 4 (large: hair lies down)"}.labeled("Root Tangent"));
     fn(&LcpParams::root_normal_weight,
        ParamInfo{"root_normal_weight", "w_n", "", 0.0, 100.0,
-                 "Normal weight of the root direction, eq. 4"});
+                 "Normal weight of the root direction, eq. 4"}.labeled("Root Normal"));
     fn(&LcpParams::whorl_u, ParamInfo{"whorl_u", "u_w", "", 0.0, 1.0,
                                       "u of the hair whorl centre on the scalp (eq. 4)"}
            .labeled("Whorl U"));
@@ -101,14 +101,14 @@ struct LcpParams {
     fn(&LcpParams::h1,
        ParamInfo{"h1", "h₁", "m", 1e-5, 1.0,
                  "Smoothing length of the connections: pairs within 2h₁ at rest (eq. 7)"}
-           .labeled("Connection Radius"));
+           .labeled("Link Radius"));
     fn(&LcpParams::a0, ParamInfo{"a0", "a₀", "", 0.0, 1.0,
                                  "Alignment threshold: pairs with a_ij < a₀ are dropped (eq. 6)"}
-           .labeled("Alignment Threshold"));
+           .labeled("Alignment"));
     fn(&LcpParams::neighbor_num,
        ParamInfo{"neighbor_num", "N_n", "", 1, 1000,
                  "Connections kept per particle, strongest c_ij W(l_ij, h₁) first (§3.2)"}
-           .labeled("Connections per Particle"));
+           .labeled("Connections"));
     /* Above ~1e10 Pa the springs' linear system is beyond single precision (measured: a
      * head cap tears apart at 1e11 Pa, holds at 1e10 Pa). */
     fn(&LcpParams::young_modulus,
@@ -130,14 +130,14 @@ struct LcpParams {
                  "Mass of hair per volume of the hair region; sets the particle mass m_i"});
     fn(&LcpParams::h2, ParamInfo{"h2", "h₂", "m", 1e-5, 1.0,
                                  "Smoothing length of hair-hair interactions (eq. 1, 16-18)"}
-           .labeled("Interaction Radius"));
+           .labeled("SPH Radius"));
     fn(&LcpParams::attraction_repulsion,
        ParamInfo{"attraction_repulsion", "", "", 0, 1, "Apply attraction/repulsion (eq. 16)"}
-           .labeled("Attraction and Repulsion"));
+           .labeled("Attract/Repel"));
     fn(&LcpParams::pressure_stiffness,
        ParamInfo{"pressure_stiffness", "k_a", "m²/s²", 0.0, 1e4,
                  "Magnitude of the attraction/repulsion, P = k_a(ρ − ρ₀) (eq. 16)"}
-           .labeled("Attraction Strength"));
+           .labeled("Attraction"));
     fn(&LcpParams::rest_density,
        ParamInfo{"rest_density", "ρ₀", "kg/m³", 0.0, 1e5,
                  "Average hair density kept by eq. 16: small is repulsive, large cohesive"});
@@ -145,7 +145,7 @@ struct LcpParams {
        ParamInfo{"hair_collision", "", "", 0, 1, "Apply inelastic hair-hair collision (eq. 17)"});
     fn(&LcpParams::collision_damping,
        ParamInfo{"collision_damping", "d_c", "1/s", 0.0, 1e6,
-                 "Collision damping constant of eq. 17 (per unit SPH volume)"});
+                 "Collision damping constant of eq. 17 (per unit SPH volume)"}.labeled("Impact Damping"));
     fn(&LcpParams::hair_friction,
        ParamInfo{"hair_friction", "", "", 0, 1, "Apply hair-hair friction (eq. 18)"});
     fn(&LcpParams::friction_damping,
@@ -158,7 +158,7 @@ struct LcpParams {
                  "Air friction: damping force proportional to velocity (§3.5)"});
     fn(&LcpParams::wind_particle_spacing,
        ParamInfo{"wind_particle_spacing", "", "m", 1e-3, 1.0,
-                 "Spacing (and smoothing length) of the air particles"});
+                 "Spacing (and smoothing length) of the air particles"}.labeled("Wind Spacing"));
     fn(&LcpParams::wind_drag,
        ParamInfo{"wind_drag", "k_d", "1/s", 0.0, 1e5,
                  "Drag between hair and air particles, acting on both (§3.5)"});

@@ -4,13 +4,15 @@
  * Featherstone's articulated-body algorithm and Hadap 2006) and of its child hairs (Kurihara
  * 1993, §4). Lengths in meters, Blender's Z is up.
  *
- * The articulated model (the default) reads the material: Young's modulus E, the strand's
+ * The articulated model reads the material: Young's modulus E, the strand's
  * radius r and the hair's density ρ give the bending stiffness EI = E π r⁴ / 4 and the line
  * density c = ρ π r²; each hinge's spring is EI over the length of strand it stands for, so
  * the look does not depend on how finely a strand is cut. How much a strand of length L
  * droops is set by the one number Γ = c g L³ / EI (gamma()).
  *
- * The kurihara1993 model reads k_θ, k_φ, γ and c per hinge. Its defaults describe a single human hair (~70 µm thick, 5·10⁻⁶ kg/m) cut into segments of
+ * The kurihara1993 model (the default: the articulated model still diverges in heavy contact,
+ * e.g. Sintel's roots inside the bust or a 15 m/s wind pressing hair on the head) reads k_θ,
+ * k_φ, γ and c per hinge. Its defaults describe a single human hair (~70 µm thick, 5·10⁻⁶ kg/m) cut into segments of
  * about 2 cm (a 0.3 m strand in 16 segments): the hinge springs hold a style against gravity
  * with a sag of roughly 0.1 rad per hinge when the strand is horizontal, and the damping is
  * about a fifth of critical for the hinge spring. The hinge constants are per hinge, so they
@@ -50,7 +52,7 @@ enum class StrandModel : int32_t {
 };
 
 struct StrandParams {
-  StrandModel model = StrandModel::Articulated;
+  StrandModel model = StrandModel::Kurihara1993;
   /* Pa, E: Young's modulus of the hair (human hair 3–4 GPa; articulated model). */
   float youngs_modulus = 3.5e9f;
   /* m, r: radius of one strand's cross-section (human hair 35–50 µm; articulated model). */
@@ -123,7 +125,8 @@ struct StrandParams {
        ParamInfo{"model", "", "", 0.0, 1.0,
                  "Articulated: the full coupled chain, sag and swing independent of the "
                  "segment count (Featherstone's articulated-body algorithm, Hadap 2006). "
-                 "Kurihara 1993: each hinge alone, with its own k, γ and c (eq. 1-7)",
+                 "Kurihara 1993: each hinge alone, with its own k, γ and c (eq. 1-7); the "
+                 "default, since the articulated model can still diverge in heavy contact",
                  "articulated,kurihara1993"});
     fn(&StrandParams::youngs_modulus,
        ParamInfo{"youngs_modulus", "E", "Pa", 1e3, 1e12,
@@ -146,7 +149,7 @@ struct StrandParams {
                  "Internal damping of bending, as a relaxation time: hinge damping = τ × hinge "
                  "stiffness (articulated model)"}
            .shown_as(1e3, "ms")
-           .soft(0.0, 0.05));
+           .soft(0.0, 0.05).labeled("Bend Damping"));
     fn(&StrandParams::root_stiffness,
        ParamInfo{"root_stiffness", "", "", 0.01, 1e4,
                  "Bending stiffness at the root relative to the rest of the strand: > 1 holds "
@@ -188,7 +191,7 @@ struct StrandParams {
        ParamInfo{"substeps", "", "", 1.0, 1000.0, "Solver steps per frame"}.soft(1.0, 32.0));
     fn(&StrandParams::children_per_guide,
        ParamInfo{"children_per_guide", "", "", 0.0, 1000.0,
-                 "Render hairs generated around each simulated guide (Kurihara 1993, §4)"});
+                 "Render hairs generated around each simulated guide (Kurihara 1993, §4)"}.labeled("Children"));
     fn(&StrandParams::child_mode,
        ParamInfo{"child_mode", "", "", 0.0, 1.0,
                  "Children around each guide (Kurihara 1993, §4 clusters) or spread over the "

@@ -309,10 +309,9 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
       const vec3 own = (delta_v - parent_delta_v) / d;
       vec2 &omega = angular_velocities_[i];
       omega.x += glm::dot(own, frame[0]);
-      /* Δφ̇ = (own · e_φ) / cos θ, regularised (Tikhonov) where the chart's pole makes φ
-       * ill-conditioned: a velocity correction never becomes a huge azimuthal rate. */
-      const float c = deflection.cos_theta;
-      omega.y += glm::dot(own, frame[1]) * c / (c * c + 0.01f);
+      if (deflection.cos_theta > 1e-3f) {
+        omega.y += glm::dot(own, frame[1]) / deflection.cos_theta;
+      }
     }
     parent_delta_v = delta_v;
     if (moved) {

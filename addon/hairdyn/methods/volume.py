@@ -23,7 +23,7 @@ class HairdynVolumeOptions(bpy.types.PropertyGroup):
     """Add-on options of the volume (Petrovic 2006): what is on, and the target shape."""
 
     use_smoothing: BoolProperty(
-        name="Velocity Smoothing",
+        name="Smoothing",
         default=False,
         description="Hair-hair friction and collision as velocity smoothing on the density "
         "grid, each substep (Petrovic 2006 §5.1); strength is Smoothing (s)",
