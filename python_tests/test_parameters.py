@@ -61,7 +61,9 @@ def test_generated_group_matches_the_native_struct(struct_name, empty_scene):
             assert field["unit"] in prop.description, where  # the SI unit too
         assert prop.name.startswith(field["label"] or field["name"].replace("_", " ").title())
         if field["symbol"]:  # in the tooltip, not the label (issue 17: labels fit)
-            assert prop.description.startswith((field["symbol"] + ",", field["symbol"] + ":")), where
+            assert prop.description.startswith((field["symbol"] + ",", field["symbol"] + ":")), (
+                where
+            )
             assert f"({field['symbol']})" not in prop.name, where
         if field["choices"]:
             choices = field["choices"].split(",")
