@@ -269,6 +269,9 @@ def test_panels_show_what_each_method_reads(method, collision, open_fixture):
     for panel in ui.panel_classes():
         if issubclass(panel, ui._SubPanel) and panel.poll(Context):
             names = []
+            if hasattr(panel, "draw_header"):  # a section's on/off switch
+                header = type("Header", (), {"layout": Layout(names)})()
+                panel.draw_header(header, Context)
             panel.draw_settings(None, Layout(names), hair.hairdyn)
             shown[panel.bl_label] = names
     sections = [s.label for s in methods.get(method).sections]

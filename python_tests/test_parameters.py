@@ -33,11 +33,13 @@ def test_every_native_struct_has_a_group(empty_scene):
 
 @pytest.mark.parametrize("struct_name", STRUCTS)
 def test_generated_group_matches_the_native_struct(struct_name, empty_scene):
-    """Field by field: kind, default, hard and soft range (in the shown unit: × display_scale),
-    enum items, label, and a tooltip naming the paper's symbol, the unit and the description.
+    """Field by field: kind, default (the native one, or the add-on's where a method declares
+    its own: Method.defaults), hard and soft range (in the shown unit: × display_scale), enum
+    items, label, and a tooltip naming the paper's symbol, the unit and the description.
     Fields the scene provides (gravity) have no property."""
     hair = bpy.data.objects.new("Hair", bpy.data.hair_curves.new("Hair"))
     group = settings_group(hair.hairdyn, struct_name)
+    own_defaults = properties.group_defaults(group.path_from_id().rsplit(".", 1)[-1])
     rna = {
         p.identifier: p for p in group.bl_rna.properties if p.identifier not in ("rna_type", "name")
     }
@@ -51,6 +53,7 @@ def test_generated_group_matches_the_native_struct(struct_name, empty_scene):
             f"{struct_name}.{field['name']}",
             field["display_scale"],
         )
+        default = own_defaults.get(field["name"], field["default"])
         assert field["description"] in prop.description, where
         for part in (field["symbol"], field["display_unit"] or field["unit"]):
             assert part in prop.description, where
@@ -58,24 +61,26 @@ def test_generated_group_matches_the_native_struct(struct_name, empty_scene):
             assert field["unit"] in prop.description, where  # the SI unit too
         assert prop.name.startswith(field["label"] or field["name"].replace("_", " ").title())
         if field["symbol"]:  # in the tooltip, not the label (issue 17: labels fit)
-            assert prop.description.startswith((field["symbol"] + ",", field["symbol"] + ":")), where
+            assert prop.description.startswith((field["symbol"] + ",", field["symbol"] + ":")), (
+                where
+            )
             assert f"({field['symbol']})" not in prop.name, where
         if field["choices"]:
             choices = field["choices"].split(",")
             assert prop.type == 'ENUM', where
             assert [i.identifier for i in prop.enum_items] == [c.upper() for c in choices], where
-            assert prop.default == choices[field["default"]].upper(), where
+            assert prop.default == choices[default].upper(), where
             continue
         if isinstance(field["default"], bool):
-            assert prop.type == 'BOOLEAN' and prop.default == field["default"], where
+            assert prop.type == 'BOOLEAN' and prop.default == default, where
             continue
         if isinstance(field["default"], (tuple, list)):
             assert list(prop.default_array) == pytest.approx(
-                [v * scale for v in field["default"]], rel=1e-6
+                [v * scale for v in default], rel=1e-6
             ), where
         else:
             assert prop.type == ('INT' if isinstance(field["default"], int) else 'FLOAT'), where
-            assert prop.default == pytest.approx(field["default"] * scale, rel=1e-6), where
+            assert prop.default == pytest.approx(default * scale, rel=1e-6), where
         for key, rna_key in (
             ("min", "hard_min"),
             ("max", "hard_max"),

@@ -35,6 +35,7 @@ _MODULES = (
     "volume_vdb",
     "methods.volume",
     "methods.swept_spheres",
+    "methods.lod",
     "methods",
     "properties",
     "outputs",

@@ -64,15 +64,17 @@ def _precision(shown_default):
     return min(6, max(3, 3 - math.floor(math.log10(abs(shown_default)))))
 
 
-def _property(field):
-    """The bpy.props definition of one field."""
-    scale, default = field["display_scale"], field["default"]
+def _property(field, default=None):
+    """The bpy.props definition of one field (with the add-on's own default when given, in
+    the native unit; the field's kind still comes from the native default)."""
+    scale, native_default = field["display_scale"], field["default"]
+    default = native_default if default is None else type(native_default)(default)
     common = {"name": label(field), "description": tooltip(field)}
     if field["choices"]:
         choices = field["choices"].split(",")
         items = [(c.upper(), c.replace("_", " ").title(), "") for c in choices]
         return EnumProperty(items=items, default=choices[default].upper(), **common)
-    if isinstance(default, bool):
+    if isinstance(native_default, bool):
         return BoolProperty(default=default, **common)
     ranges = {
         key: value
@@ -84,9 +86,9 @@ def _property(field):
         )
         if value is not None
     }
-    if isinstance(default, int):
+    if isinstance(native_default, int):
         return IntProperty(default=default, **{k: int(v) for k, v in ranges.items()}, **common)
-    if isinstance(default, (tuple, list)):
+    if isinstance(native_default, (tuple, list)):
         shown = tuple(v * scale for v in default)
         return FloatVectorProperty(
             default=shown,
@@ -106,10 +108,18 @@ def _property(field):
     )
 
 
-def property_group(params_class):
-    """A new PropertyGroup class (not registered) with one property per shown field."""
+def property_group(params_class, defaults=None):
+    """A new PropertyGroup class (not registered) with one property per shown field; `defaults`
+    {field: value in the native unit} where the add-on's default differs (Method.defaults)."""
     name = CLASS_PREFIX + params_class.__name__
-    annotations = {field["name"]: _property(field) for field in shown_fields(params_class)}
+    defaults = defaults or {}
+    unknown = set(defaults) - {field["name"] for field in shown_fields(params_class)}
+    if unknown:
+        raise ValueError(f"{params_class.__name__} has no field {', '.join(sorted(unknown))}")
+    annotations = {
+        field["name"]: _property(field, defaults.get(field["name"]))
+        for field in shown_fields(params_class)
+    }
     return type(
         name,
         (bpy.types.PropertyGroup,),

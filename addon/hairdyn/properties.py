@@ -3,8 +3,9 @@
 `HairdynSettings` holds the add-on's own options (method, head, colliders, frame range,
 outputs, cache). At registration one PointerProperty is added per settings group: a group
 generated from each native `<X>Params` struct (parameters.py; its attribute is the name a
-method adapter gives it in `Method.params`, else the struct's name in snake case) and each
-method's add-on-only options (`Method.options`). The Method enum comes from the registry.
+method adapter gives it in `Method.params`, else the struct's name in snake case; the native
+defaults but where a method's `defaults` differs) and each method's add-on-only options
+(`Method.options`). The Method enum comes from the registry.
 """
 
 import re
@@ -164,6 +165,15 @@ def _group_attribute(struct_name):
     return re.sub(r"(?<!^)(?=[A-Z])", "_", struct_name[: -len("Params")]).lower()
 
 
+def group_defaults(attribute):
+    """{field: default} where the add-on's default for a generated group differs from the
+    native struct's (the methods' `defaults`)."""
+    found = {}
+    for method in methods.all_methods():
+        found.update(method.defaults.get(attribute, {}))
+    return found
+
+
 def settings_groups():
     """{settings attribute: PropertyGroup class} of every group the settings hold: generated
     from the native structs (none when the native module does not load: the panel says why)
@@ -172,7 +182,8 @@ def settings_groups():
     ok, _ = native.status()
     if ok:
         for struct_name, params_class in parameters.native_structs(native.load()).items():
-            groups[_group_attribute(struct_name)] = parameters.property_group(params_class)
+            attribute = _group_attribute(struct_name)
+            groups[attribute] = parameters.property_group(params_class, group_defaults(attribute))
     for method in methods.all_methods():
         groups.update(method.options)
     return groups

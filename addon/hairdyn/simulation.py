@@ -121,6 +121,7 @@ class Simulation:
             start = time.perf_counter()
             self.colliders.update(depsgraph)
             self.collision_ms = (time.perf_counter() - start) * 1000.0
+        self.method.read_scene(depsgraph)
         start = time.perf_counter()
         self.method.step(frame_dt, head_matrix)
         elapsed_ms = (time.perf_counter() - start) * 1000.0

@@ -48,6 +48,8 @@ def bake_status(obj):
                 f", penetration {report['penetration_max'] * 1000:.2f} mm "
                 f"({report['penetration_share'] * 100:.2f}%)"
             )
+        if "lod_error" in report:
+            text += f", lod_error {report['lod_error'] * 100:.2f}%"
     return text
 
 
@@ -90,8 +92,8 @@ class HAIRDYN_PT_main(_HairdynPanel, bpy.types.Panel):
 
 
 def section_fields(method, section, group):
-    """The fields a method's section shows: those it names, then with `rest` those of the
-    group no section of the method names."""
+    """The fields a method's section shows as rows: those it names, then with `rest` those of
+    the group no section of the method names (nor draws in its header)."""
     names = [
         p.identifier for p in group.bl_rna.properties if p.identifier not in ("rna_type", "name")
     ]
@@ -101,7 +103,7 @@ def section_fields(method, section, group):
             name
             for other in method.sections
             if other.group == section.group
-            for name in other.fields
+            for name in (*other.fields, other.header)
         }
         shown += [name for name in names if name not in named]
     return shown
@@ -122,24 +124,32 @@ def _method_panel(method, index, section):
         )
 
     def draw_settings(self, layout, settings):
+        group = getattr(settings, section.group)
+        if section.header is not None:
+            layout.active = bool(getattr(group, section.header))
         if section.draw is not None:
             section.draw(layout, settings)
-        group = getattr(settings, section.group)
         for name in section_fields(method, section, group):
             row = layout.row()
             active = section.active.get(name)
             row.active = active is None or bool(active(group))
             row.prop(group, name)
 
+    def draw_header(self, context):
+        self.layout.prop(getattr(context.object.hairdyn, section.group), section.header, text="")
+
+    attributes = {
+        "bl_label": section.label,
+        "bl_options": set() if section.open else {'DEFAULT_CLOSED'},
+        "poll": classmethod(poll),
+        "draw_settings": draw_settings,
+    }
+    if section.header is not None:
+        attributes["draw_header"] = draw_header
     return type(
         f"HAIRDYN_PT_{method.identifier.lower()}_{index}",
         (_SubPanel, bpy.types.Panel),
-        {
-            "bl_label": section.label,
-            "bl_options": set() if section.open else {'DEFAULT_CLOSED'},
-            "poll": classmethod(poll),
-            "draw_settings": draw_settings,
-        },
+        attributes,
     )
 
 

@@ -7,11 +7,12 @@ from .base import Build, Method, Section, Stream  # noqa: F401 - the adapters' i
 from .follow import Follow
 from .lcp import Lcp
 from .strands import Strands, register_extension
-from . import swept_spheres, volume
+from . import lod, swept_spheres, volume
 
 BUILTIN = (Follow, Strands, Lcp)
-# Groom-wide substep passes on the Strands method, in the order they run.
-for _extension in (volume.EXTENSION, swept_spheres.EXTENSION):
+# Groom-wide substep passes on the Strands method, in the order they run; then level of detail,
+# which replaces the strand solver (and refuses the passes: it runs none).
+for _extension in (volume.EXTENSION, swept_spheres.EXTENSION, lod.EXTENSION):
     register_extension(_extension)
 
 _registry = {}  # identifier -> Method subclass, in registration order

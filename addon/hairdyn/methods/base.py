@@ -38,12 +38,24 @@ class Section:
     """One panel section of a method: `fields` of the settings group `group`, then with
     `rest` every field of the group no section of the method names (so a field added to the
     native struct shows up without touching the add-on); `active` {field: predicate(group)}
-    greys a row out; `draw(layout, settings)` draws extra rows first."""
+    greys a row out; `draw(layout, settings)` draws extra rows first; `header` names a boolean
+    field of the group drawn in the section's header as its on/off switch (the rows grey out
+    while it is off)."""
 
-    def __init__(self, label, group, fields=(), rest=False, active=None, draw=None, open=False):
+    def __init__(
+        self,
+        label,
+        group,
+        fields=(),
+        rest=False,
+        active=None,
+        draw=None,
+        open=False,
+        header=None,
+    ):
         self.label, self.group, self.fields, self.rest = label, group, tuple(fields), rest
         self.active = active or {}
-        self.draw, self.open = draw, open
+        self.draw, self.open, self.header = draw, open, header
 
 
 class Build:
@@ -88,6 +100,9 @@ class Method:
     description = ""
     params = {}  # settings attribute -> native struct name it reads ({"strands": "StrandParams"})
     options = {}  # settings attribute -> PropertyGroup class of add-on-only options
+    # settings attribute -> {field: default}: where the add-on's default differs from the
+    # native struct's (level of detail is off until an artist turns it on: it needs a camera)
+    defaults = {}
     collision = ("report",)  # collision settings it reads: "maps", "response", "report"
     sections = ()  # Section(...)s of its panel
     shows = ()  # output settings the Output panel shows for it ("output_children", ...)
@@ -96,6 +111,10 @@ class Method:
         """Build the solver from the scene at the rest frame (a ValueError from the native
         module becomes a HairdynError naming the object)."""
         raise NotImplementedError
+
+    def read_scene(self, depsgraph):
+        """Read what it follows in the scene at the current frame besides the head and the
+        colliders (a camera), before step(); most methods follow nothing else."""
 
     def step(self, frame_dt, head_matrix):
         """Advance one frame of frame_dt seconds to the head's new world matrix."""

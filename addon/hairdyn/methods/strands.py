@@ -4,7 +4,10 @@ plug groom-wide substep passes (volume, hair-hair collision, ...) into it.
 
 An extension is an `Extension`: the settings group(s) it adds (a native parameter struct, whose
 PropertyGroup is generated, and/or add-on-only options), its panel sections, and
-`attach(solver, build)`, called once the solver is built, which adds its native pass.
+`attach(solver, build)`, called once the solver is built, which adds its native pass. An
+extension may instead replace the solver (`solver(build, params, root_normals)`: level of
+detail); a replacement that runs no substep passes raises `NoPasses` from add_pass, and the
+combination is refused with a sentence naming both.
 `register_extension()` must run before the add-on registers (import it from methods/__init__).
 """
 
@@ -17,13 +20,32 @@ from .base import Method, Section, Stream, nearest
 class Extension:
     """Something the strand solver runs each substep (native SubstepPass): params {settings
     attribute: native struct name}, options {settings attribute: PropertyGroup class},
-    sections (Section ...), attach(solver, build) adds the pass to a built solver and returns
-    an `Attached` (or None when the artist left it off)."""
+    defaults (Method.defaults), sections (Section ...), attach(solver, build) adds the pass to
+    a built solver and returns an `Attached` (or None when the artist left it off); `solver`,
+    when given, is solver(build, strand_params, root_normals) -> a stand-in for the
+    StrandSolver (or None when the artist left it off). `label` names it in messages."""
 
-    def __init__(self, name, attach, params=None, options=None, sections=()):
-        self.name, self.attach = name, attach
+    def __init__(
+        self,
+        name,
+        attach,
+        params=None,
+        options=None,
+        sections=(),
+        solver=None,
+        defaults=None,
+        label=None,
+    ):
+        self.name, self.attach, self.solver = name, attach, solver
         self.params, self.options = dict(params or {}), dict(options or {})
+        self.defaults = dict(defaults or {})
         self.sections = tuple(sections)
+        self.label = label or (self.sections[0].label if self.sections else name)
+
+
+class NoPasses(Exception):
+    """Raised by a solver stand-in's add_pass: it cannot run substep passes (its argument: the
+    stand-in's name, for the message)."""
 
 
 class Attached:
@@ -114,22 +136,42 @@ class Strands(Method):
         params = build.params("strands")
         groom = build.groom
         head_mesh = bridge.read_mesh(build.head, build.depsgraph)
-        self.solver = build.native.StrandSolver(
-            groom.curve_offsets,
-            groom.positions_wo,
-            build.head_matrix,
-            root_normals(groom, head_mesh),
-            params,
-            build.params("wind"),
-        )
+        normals = root_normals(groom, head_mesh)
+        self.solver = self._make_solver(build, params, normals)
         self.children = self._make_children(build, params, head_mesh)
         if build.colliders is not None:
             self.solver.set_colliders(build.colliders.set, build.colliders.params)
-        attached = (extension.attach(self.solver, build) for extension in self.extensions)
-        self.attached = [item for item in attached if item is not None]
+        self.attached = []
+        for extension in self.extensions:
+            try:
+                item = extension.attach(self.solver, build)
+            except NoPasses as error:
+                raise HairdynError(
+                    f"{error} runs no substep passes, so it cannot be combined with "
+                    f"{extension.label}: turn one of them off"
+                ) from None
+            if item is not None:
+                self.attached.append(item)
         self.strand_columns = {
             name: width for item in self.attached for name, width in item.strand_columns.items()
         }
+
+    def _make_solver(self, build, params, normals):
+        """The native StrandSolver, or the stand-in an extension replaces it with."""
+        for extension in self.extensions:
+            if extension.solver is not None:
+                solver = extension.solver(build, params, normals)
+                if solver is not None:
+                    return solver
+        groom = build.groom
+        return build.native.StrandSolver(
+            groom.curve_offsets,
+            groom.positions_wo,
+            build.head_matrix,
+            normals,
+            params,
+            build.params("wind"),
+        )
 
     def _make_children(self, build, params, head_mesh):
         """Kurihara 1993 §4: child hairs clustered around the guides, or spread over the
@@ -145,6 +187,11 @@ class Strands(Method):
         return build.native.ChildHairs.between_guides(
             groom.curve_offsets, groom.positions_wo, self.solver.root_frames, roots
         )
+
+    def read_scene(self, depsgraph):
+        read = getattr(self.solver, "read_scene", None)  # a stand-in that follows a camera
+        if read is not None:
+            read(depsgraph)
 
     def step(self, frame_dt, head_matrix):
         self.solver.step(frame_dt, head_matrix)
@@ -192,4 +239,5 @@ def register_extension(extension):
     Strands.extensions.append(extension)
     Strands.params = {**Strands.params, **extension.params}
     Strands.options = {**Strands.options, **extension.options}
+    Strands.defaults = {**Strands.defaults, **extension.defaults}
     Strands.sections = Strands.sections + extension.sections

@@ -1,0 +1,258 @@
+"""Owns: level of detail on the Strands method (Ward & Lin 2003 §4, §6): the groom's hierarchy of
+strips, clusters and strand groups, chosen every frame by the camera's view, distance and the
+hair's speed, split and merged smoothly (native LodSolver). It replaces the StrandSolver (same
+strand parameters, wind and colliders) and follows a camera: its view-projection matrix is read
+from the scene every frame. Every strand of the groom follows the skeleton that drives it, so the
+output keeps the groom's topology; the point attribute `lod_level` says which level drives it.
+
+The LodSolver runs no substep passes, so the volume's smoothing and targeting and the swept
+spheres are refused with it (strands.NoPasses); shell normals, child hairs and the collision maps
+work. With "Measure lod_error" a plain StrandSolver runs the same frames alongside (twice the
+work) and the report gives the mean distance between the two, as a share of the hair length.
+"""
+
+import time
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, PointerProperty
+
+from ..errors import HairdynError
+from .base import Section
+from .strands import Attached, Extension, NoPasses
+
+NAME = "Level of detail (Ward & Lin 2003)"
+
+
+def _is_camera(_self, obj):
+    return obj.type == 'CAMERA'
+
+
+class HairdynLodOptions(bpy.types.PropertyGroup):
+    """Add-on options of the level of detail: the camera it follows, and the fine reference."""
+
+    camera: PointerProperty(
+        name="Camera",
+        type=bpy.types.Object,
+        poll=_is_camera,
+        description="Camera whose view, distance and frustum choose the level of detail every "
+        "frame (Ward & Lin 2003 §6.1); empty: the scene's camera",
+    )
+    measure_error: BoolProperty(
+        name="Measure lod_error",
+        default=False,
+        description="Also simulate every strand without level of detail over the same frames "
+        "and report lod_error, the mean distance between the two as a share of the hair "
+        "length. Doubles the work",
+    )
+
+
+def rotation(matrix):
+    """The rotation of a (4, 4) object matrix, its axes' scale removed (a mirrored one kept
+    proper, as the native HeadPose does)."""
+    axes = np.array(matrix, dtype=np.float64)[:3, :3]
+    scale = np.linalg.norm(axes, axis=0)
+    if np.linalg.det(axes) < 0.0:
+        scale[0] = -scale[0]
+    return axes / scale
+
+
+def view_projection(camera, scene, depsgraph):
+    """World -> clip (4, 4) float64 of a camera as it renders: projection @ view, the
+    projection from the scene's render size and pixel aspect (OpenGL clip space)."""
+    evaluated = camera.evaluated_get(depsgraph)
+    render = scene.render
+    projection = evaluated.calc_matrix_camera(
+        depsgraph,
+        x=render.resolution_x,
+        y=render.resolution_y,
+        scale_x=render.pixel_aspect_x,
+        scale_y=render.pixel_aspect_y,
+    )
+    view = evaluated.matrix_world.inverted()
+    return np.array(projection @ view, dtype=np.float64)
+
+
+def strand_lengths(curve_offsets, positions):
+    """Each strand's length (C,)."""
+    segments = np.linalg.norm(np.diff(positions.astype(np.float64), axis=0), axis=1)
+    inside = np.ones(len(segments), dtype=bool)
+    inside[curve_offsets[1:-1] - 1] = False  # the step from one strand's tip to the next root
+    per_point = np.where(inside, segments, 0.0)
+    cumulative = np.concatenate(([0.0], np.cumsum(per_point)))
+    return cumulative[curve_offsets[1:] - 1] - cumulative[curve_offsets[:-1]]
+
+
+class LodStrands(Attached):
+    """A LodSolver in the StrandSolver's place (step, positions, root_frames, set_colliders)
+    and the extension's attached figures: lod_level per point, the report."""
+
+    strand_columns = {"lod_level": 1}
+
+    def __init__(self, build, params, root_normals):
+        native, groom, scene = build.native, build.groom, build.scene
+        self.scene, self.options = scene, build.settings.lod_options
+        self.camera = self._camera()
+        self.view_projection = view_projection(self.camera, scene, build.depsgraph)
+        wind = build.params("wind")
+        self.native = native
+        self.solver = native.LodSolver(
+            groom.curve_offsets,
+            groom.positions_wo,
+            build.head_matrix,
+            groom.root_uvs,
+            root_normals,
+            params,
+            wind,
+            build.params("lod"),
+        )
+        self.fine = None
+        if self.options.measure_error:  # the same strands without level of detail
+            self.fine = native.StrandSolver(
+                groom.curve_offsets,
+                groom.positions_wo,
+                build.head_matrix,
+                root_normals,
+                params,
+                wind,
+            )
+        self.hair_length = float(strand_lengths(groom.curve_offsets, groom.positions_wo).mean())
+        self.rest_frames = np.array(
+            native.root_frames(groom.curve_offsets, groom.positions_wo, root_normals)
+        )
+        self.rest_rotation = rotation(build.head_matrix)
+        self.root_frames = self.rest_frames
+        self.levels, self.switches, self.errors, self.ms, self.fine_ms = [], 0, [], [], []
+
+    def _camera(self):
+        camera = self.options.camera or self.scene.camera
+        if camera is None:
+            raise HairdynError(
+                f"{NAME} needs a camera: set Camera in its section, or give the scene a camera"
+            )
+        return camera
+
+    # The StrandSolver's interface, as the Strands method uses it.
+
+    def add_pass(self, _substep_pass):
+        raise NoPasses(NAME)
+
+    def set_colliders(self, colliders, params):
+        """Every skeleton collides (and the colliders hide hair from the camera, §6.1); the
+        fine reference collides the same way."""
+        self.solver.set_colliders(colliders, params)
+        if self.fine is not None:
+            self.fine.set_colliders(colliders, params)
+
+    def read_scene(self, depsgraph):
+        self.camera = self._camera()  # the scene's camera may change (markers)
+        self.view_projection = view_projection(self.camera, self.scene, depsgraph)
+
+    def step(self, frame_dt, head_matrix):
+        start = time.perf_counter()
+        self.solver.step(frame_dt, head_matrix, self.view_projection)
+        self.ms.append((time.perf_counter() - start) * 1000.0)
+        self.levels.append(list(self.solver.skeletons_per_level))
+        self.switches += self.solver.lod_switches
+        # The StrandSolver's root frames: the rest frames turned with the head.
+        turn = rotation(head_matrix) @ self.rest_rotation.T
+        self.root_frames = np.ascontiguousarray(self.rest_frames @ turn.T, dtype=np.float32)
+        if self.fine is not None:
+            start = time.perf_counter()
+            self.fine.step(frame_dt, head_matrix)
+            self.fine_ms.append((time.perf_counter() - start) * 1000.0)
+            distance = self.native.mean_distance(self.solver.positions, self.fine.positions)
+            self.errors.append(distance / self.hair_length)
+
+    @property
+    def positions(self):
+        return self.solver.positions
+
+    @property
+    def diverged_num(self):
+        """The fine reference's diverged strands (the LodSolver does not count its own: its
+        non-finite output is refused by Simulation.frame)."""
+        return 0 if self.fine is None else self.fine.diverged_num
+
+    contacts_num = 0  # the LodSolver does not count its contacts
+
+    # The extension's attached figures.
+
+    def strand_attributes(self):
+        return {"lod_level": np.asarray(self.solver.lod_level, dtype=np.float32)}
+
+    def report(self):
+        """skeletons_per_level (min / mean / max over the frames, per level from the top
+        strips), lod_switches (splits, merges and occlusion collapses over the run), lod_ms and,
+        measured, lod_error (mean over the frames; lod_error_max the worst frame) and
+        lod_fine_ms."""
+        counts = np.array(self.levels, dtype=np.float64).reshape(-1, self.solver.max_depth + 1)
+        figures = {
+            "skeletons_per_level": {
+                "min": [int(v) for v in counts.min(axis=0)] if len(counts) else [],
+                "mean": [float(v) for v in counts.mean(axis=0)] if len(counts) else [],
+                "max": [int(v) for v in counts.max(axis=0)] if len(counts) else [],
+            },
+            "lod_switches": int(self.switches),
+            "lod_nodes": int(self.solver.nodes_num),
+            "lod_strips": int(self.solver.top_nodes_num),
+            "lod_coarsest_level": int(self.solver.coarsest_level),
+            "lod_finest_level": int(self.solver.finest_level),
+            "lod_camera": self.camera.name,
+            "lod_ms": float(np.median(self.ms)) if self.ms else 0.0,
+        }
+        if self.fine is not None:
+            figures.update(
+                lod_error=float(np.mean(self.errors)) if self.errors else 0.0,
+                lod_error_max=float(np.max(self.errors)) if self.errors else 0.0,
+                lod_fine_ms=float(np.median(self.fine_ms)) if self.fine_ms else 0.0,
+            )
+        return figures
+
+
+def make_solver(build, params, root_normals):
+    if not build.settings.lod.enabled:
+        return None
+    return LodStrands(build, params, root_normals)
+
+
+def attach(solver, _build):
+    return solver if isinstance(solver, LodStrands) else None
+
+
+def _draw(layout, settings):
+    layout.prop(settings.lod_options, "camera")
+    layout.prop(settings.lod_options, "measure_error")
+    layout.label(
+        text="Not with volume smoothing, targeting or swept spheres (no substep passes)",
+        icon='INFO',
+    )
+
+
+EXTENSION = Extension(
+    "lod",
+    attach,
+    params={"lod": "LodParams"},
+    options={"lod_options": HairdynLodOptions},
+    defaults={"lod": {"enabled": False}},  # it needs a camera: an artist turns it on
+    solver=make_solver,
+    label=NAME,
+    sections=(
+        Section(
+            "Level of Detail (Ward & Lin 2003)",
+            "lod",
+            (
+                "distance_near",
+                "distance_far",
+                "velocity_slow",
+                "velocity_fast",
+                "finest_level",
+                "coarsest_level",
+                "merge_threshold",
+            ),
+            rest=True,
+            header="enabled",
+            draw=_draw,
+        ),
+    ),
+)

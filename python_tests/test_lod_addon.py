@@ -1,0 +1,157 @@
+"""Level of detail (Ward & Lin 2003 §4, §6) in the add-on: the Strands method's section, a bake
+through the LodSolver that keeps the groom's topology and writes `lod_level`, the camera that
+chooses the levels (the scene's, or the section's own), lod_error against a fine simulation,
+the report, and the combinations it refuses."""
+
+import bpy
+import numpy as np
+import pytest
+from mathutils import Vector
+
+from hairdyn import bake, cli, native, simulation, ui
+from hairdyn.errors import HairdynError
+from test_methods import Layout
+
+SECTION = "Level of Detail (Ward & Lin 2003)"
+
+
+def lod_hair(open_fixture, name="head_curves.blend"):
+    """The fixture's hair on the Strands method with level of detail on, no child hairs."""
+    open_fixture(name)
+    hair = bpy.data.objects["Hair"]
+    settings = hair.hairdyn
+    settings.method = 'STRANDS'
+    settings.strands.children_per_guide = 0
+    settings.lod.enabled = True
+    return hair
+
+
+def camera_facing_hair(hair, distance, name="LodCamera"):
+    """A camera `distance` metres from the hair's centre along the fixture camera's view axis."""
+    positions = np.array([p.position for p in hair.data.points])
+    centre = hair.matrix_world @ Vector(positions.mean(axis=0).tolist())
+    scene_camera = bpy.data.objects["Camera"]
+    forward = scene_camera.matrix_world.to_3x3() @ Vector((0.0, 0.0, -1.0))
+    camera = bpy.data.objects.new(name, bpy.data.cameras.new(name))
+    camera.data.clip_end = 1000.0
+    camera.matrix_world = scene_camera.matrix_world.copy()
+    camera.location = centre - forward.normalized() * distance
+    bpy.context.scene.collection.objects.link(camera)
+    return camera
+
+
+def levels(hair):
+    """The output curves' lod_level point attribute."""
+    attribute = hair.hairdyn.output_curves.data.attributes["lod_level"]
+    values = np.empty(len(attribute.data), dtype=np.float32)
+    attribute.data.foreach_get("value", values)
+    return values
+
+
+def test_section_shows_the_lod_fields_with_enabled_in_its_header(open_fixture):
+    open_fixture("head_curves.blend")
+    hair = bpy.data.objects["Hair"]
+    settings = hair.hairdyn
+    assert not settings.lod.enabled  # off until asked for: it needs a camera
+    panel = next(p for p in ui.panel_classes() if getattr(p, "bl_label", "") == SECTION)
+
+    class Context:
+        object = hair
+
+    settings.method = 'LCP'
+    assert not panel.poll(Context)
+    settings.method = 'STRANDS'
+    assert panel.poll(Context)
+
+    class Section(Layout):  # rows of their own, so the section's own `active` stays
+        def row(self, **_):
+            return Layout(self.shown)
+
+    header, rows = [], []
+    panel.draw_header(type("Header", (), {"layout": Layout(header)})(), Context)
+    layout = Section(rows)
+    panel.draw_settings(None, layout, settings)
+    assert header == ["enabled"]
+    assert not layout.active  # greyed out while off
+    settings.lod.enabled = True
+    panel.draw_settings(None, layout, settings)
+    assert layout.active
+    fields = {f["name"] for f in native.load().LodParams.fields()} - {"enabled"}
+    assert fields <= set(rows) and "enabled" not in rows
+    assert {"camera", "measure_error", "distance_near", "merge_threshold"} <= set(rows)
+    assert rows.index("camera") < rows.index("distance_near")
+
+
+def test_bake_keeps_the_topology_and_writes_lod_level(saved_fixture):
+    hair = saved_fixture("head_shake.blend", 3)
+    settings = hair.hairdyn
+    settings.method = 'STRANDS'
+    settings.strands.children_per_guide = 0
+    settings.lod.enabled = True
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    from hairdyn.cache import Cache
+
+    cache = Cache.open(bake.cache_directory(hair))
+    report = cache.manifest["report"]
+    assert report["frames"] == 3 and report["nan_frames"] == 0
+    per_level = report["skeletons_per_level"]
+    assert len(per_level["min"]) == len(per_level["mean"]) == len(per_level["max"]) >= 2
+    assert all(
+        a <= b <= c for a, b, c in zip(per_level["min"], per_level["mean"], per_level["max"])
+    )
+    assert report["lod_switches"] > 0  # the first frame splits to the levels the camera asks
+    assert report["lod_ms"] > 0.0 and report["lod_camera"] == "Camera"
+    assert "lod_error" not in report  # not measured unless asked for
+    output = settings.output_curves.data
+    sizes = [len(curve.points) for curve in hair.data.curves]
+    assert [len(curve.points) for curve in output.curves] == sizes
+    bpy.context.scene.frame_set(3)  # the bake plays back: frame 3's levels on the output
+    shown = levels(hair)
+    cached = cache.read_frame(3)["lod_level"]
+    np.testing.assert_array_equal(shown, cached.ravel())
+    assert np.isfinite(shown).all() and (shown == np.round(shown)).all()
+    finest = len(per_level["min"]) - 1
+    assert shown.min() >= 0 and shown.max() <= finest
+
+
+def test_far_camera_keeps_the_coarsest_level_and_a_close_one_refines(open_fixture):
+    hair = lod_hair(open_fixture)
+    settings = hair.hairdyn
+    settings.lod.velocity_slow, settings.lod.velocity_fast = 50.0, 100.0  # distance decides
+    far = camera_facing_hair(hair, 40.0)
+    settings.lod_options.camera = far  # the section's camera over the scene's (≈1 m away)
+    report = simulation.run(bpy.context, hair, 1, 2)
+    assert (levels(hair) == report["lod_coarsest_level"]).all()
+    assert report["skeletons_per_level"]["max"][0] == report["lod_strips"]
+    assert sum(report["skeletons_per_level"]["max"][1:]) == 0
+    settings.lod_options.camera = camera_facing_hair(hair, 0.3, "Close")
+    report = simulation.run(bpy.context, hair, 1, 2)
+    close = levels(hair)
+    assert close.max() == report["lod_finest_level"] > report["lod_coarsest_level"]
+    assert len(np.unique(close)) >= 2
+
+
+def test_lod_error_is_measured_against_the_fine_strands(open_fixture):
+    hair = lod_hair(open_fixture, "head_shake.blend")
+    hair.hairdyn.lod_options.measure_error = True
+    report = simulation.run(bpy.context, hair, 1, 4)
+    assert 0.0 < report["lod_error"] <= report["lod_error_max"] < 0.05  # of the hair length
+    assert report["lod_fine_ms"] > 0.0
+
+
+def test_substep_passes_and_no_camera_are_refused_with_a_sentence(open_fixture):
+    hair = lod_hair(open_fixture)
+    settings = hair.hairdyn
+    cli.apply_settings(settings, ["lod.enabled=true", "volume_options.use_smoothing=true"])
+    with pytest.raises(HairdynError, match="cannot be combined with Volume"):
+        simulation.run(bpy.context, hair, 1, 1)
+    settings.volume_options.use_smoothing = False
+    settings.swept_spheres.hair_hair = True
+    with pytest.raises(HairdynError, match="cannot be combined with Swept Spheres"):
+        simulation.run(bpy.context, hair, 1, 1)
+    settings.swept_spheres.hair_hair = False
+    bpy.context.scene.camera = None
+    with pytest.raises(HairdynError, match="needs a camera"):
+        simulation.run(bpy.context, hair, 1, 1)
+    cli.apply_settings(settings, ["lod_options.camera=Camera"])  # by name, as --set takes it
+    assert simulation.run(bpy.context, hair, 1, 1)["lod_camera"] == "Camera"
