@@ -199,4 +199,22 @@ py::array float_view(const Span<float> span, const py::handle owner)
                         span.data(), owner);
 }
 
+Span<vec3> as_root_normals(const py::handle obj, const int64_t curves_num)
+{
+  if (obj.is_none()) {
+    return {};
+  }
+  const Span<vec3> normals = as_float3(obj, "root_normals_wo");
+  if (normals.size() != curves_num) {
+    fail("root_normals_wo must have one row per strand (" + std::to_string(curves_num) +
+         "), not " + std::to_string(normals.size()));
+  }
+  for (int64_t i = 0; i < normals.size(); i++) {
+    if (glm::length(normals[i]) < 1e-6f) {
+      fail("root_normals_wo has a zero-length normal at row " + std::to_string(i));
+    }
+  }
+  return normals;
+}
+
 }  // namespace hairdyn::bindings

@@ -41,6 +41,8 @@ Span<mat3> as_frames(py::handle obj, const char *name);
 mat4 as_matrix(py::handle obj, const char *name);
 /* Raises "Invalid hair: ..." unless the strands can be simulated. */
 void check_groom(Span<int32_t> curve_offsets, Span<vec3> positions);
+/* One non-zero normal per strand, (C, 3) float32, or an empty span for None. */
+Span<vec3> as_root_normals(py::handle obj, int64_t curves_num);
 /* A read-only numpy (N, 3) float32 view of `span`; `owner` lives as long as the view. */
 py::array float3_view(Span<vec3> span, py::handle owner);
 /* A read-only numpy (N, 3, 3) float32 view of `span` (see as_frames). */

@@ -30,24 +30,6 @@ Span<vec2> as_root_uvs(const py::handle obj, const int64_t curves_num)
   return uvs;
 }
 
-Span<vec3> as_normals(const py::handle obj, const int64_t curves_num)
-{
-  if (obj.is_none()) {
-    return {};
-  }
-  const Span<vec3> normals = as_float3(obj, "root_normals_wo");
-  if (normals.size() != curves_num) {
-    fail("root_normals_wo must have one row per strand (" + std::to_string(curves_num) +
-         "), not " + std::to_string(normals.size()));
-  }
-  for (int64_t i = 0; i < normals.size(); i++) {
-    if (glm::length(normals[i]) < 1e-6f) {
-      fail("root_normals_wo has a zero-length normal at row " + std::to_string(i));
-    }
-  }
-  return normals;
-}
-
 void check_lod_params(const LodParams &params)
 {
   const std::string error = find_lod_params_error(params);
@@ -92,7 +74,7 @@ void bind_lod(py::module_ &m)
              const Span<vec3> rest = as_float3(rest_positions_wo, "rest_positions_wo");
              check_groom(offsets, rest);
              const Span<vec2> uvs = as_root_uvs(root_uvs, offsets.size() - 1);
-             const Span<vec3> normals = as_normals(root_normals_wo, offsets.size() - 1);
+             const Span<vec3> normals = as_root_normals(root_normals_wo, offsets.size() - 1);
              const mat4 head = as_matrix(head_to_world_rest, "head_to_world_rest");
              check_lod_params(lod_params);
              py::gil_scoped_release release;
