@@ -67,12 +67,14 @@ struct LodParams {
                  "Clusters narrower than this stop splitting and strand groups take over (Ward "
                  "& Lin 2003, §4.1)"}
            .shown_as(1000.0, "mm")
-           .soft(0.0, 0.05));
+           .soft(0.0, 0.05)
+           .labeled("Cluster Radius"));
     fn(&LodParams::min_group_strands,
        ParamInfo{"min_group_strands", "", "", 1.0, 1000000.0,
                  "Strand groups stop splitting at this many strands; 1 goes down to single "
                  "strands (Ward & Lin 2003, §4.2, §7.2)"}
-           .soft(1.0, 20.0));
+           .soft(1.0, 20.0)
+           .labeled("Group Strands"));
     fn(&LodParams::skeleton_points,
        ParamInfo{"skeleton_points", "n", "", 0.0, 1000.0,
                  "Control points of every skeleton, the same at every level (Ward & Lin 2003, "

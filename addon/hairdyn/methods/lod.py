@@ -7,7 +7,7 @@ output keeps the groom's topology; the point attribute `lod_level` says which le
 
 The LodSolver runs no substep passes, so the volume's smoothing and targeting and the swept
 spheres are refused with it (strands.NoPasses); shell normals, child hairs and the collision maps
-work. With "Measure lod_error" a plain StrandSolver runs the same frames alongside (twice the
+work. With "Measure Error" a plain StrandSolver runs the same frames alongside (twice the
 work) and the report gives the mean distance between the two, as a share of the hair length.
 """
 
@@ -39,7 +39,7 @@ class HairdynLodOptions(bpy.types.PropertyGroup):
         "frame (Ward & Lin 2003 §6.1); empty: the scene's camera",
     )
     measure_error: BoolProperty(
-        name="Measure lod_error",
+        name="Measure Error",
         default=False,
         description="Also simulate every strand without level of detail over the same frames "
         "and report lod_error, the mean distance between the two as a share of the hair "
