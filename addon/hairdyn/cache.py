@@ -258,7 +258,7 @@ class Cache:
             array = np.load(path, allow_pickle=False)
         except FileNotFoundError:
             raise CacheError(f"The cache {what} '{path}' is missing") from None
-        except (OSError, ValueError, EOFError, KeyError) as error:
+        except Exception as error:  # a garbled file: numpy's parser may raise anything
             raise CacheError(f"The cache {what} '{path}' is corrupted or truncated ({error})") from None
         if not isinstance(array, np.ndarray):  # an .npz archive under a .npy name
             if hasattr(array, "close"):
@@ -313,8 +313,8 @@ class Cache:
                     shape, fortran, dtype = read_header(file)
                     header_end = file.tell()
                 size = path.stat().st_size
-            except (OSError, ValueError, EOFError):
-                return False
+            except Exception:  # a garbled header: numpy's parser may raise anything
+                return False  # (numpy 2 on Python 3.13: tokenize.TokenError)
             expected = (layout.points_num, layout.width)
             if dtype != np.float32 or fortran or tuple(shape) != expected or \
                     size != header_end + 4 * layout.points_num * layout.width:
