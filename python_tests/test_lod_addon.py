@@ -10,7 +10,7 @@ from mathutils import Vector
 
 from hairdyn import bake, cli, native, simulation, ui
 from hairdyn.errors import HairdynError
-from test_methods import Layout
+from layout_recorder import Layout
 
 SECTION = "Level of Detail (Ward & Lin 2003)"
 

@@ -6,6 +6,7 @@ method cancels the operator with a report and prints its traceback once in playb
 import bpy
 import numpy as np
 import pytest
+from layout_recorder import Layout
 
 import hairdyn
 from conftest import FIXTURES
@@ -215,34 +216,6 @@ def test_a_strands_extension_adds_its_settings_and_pass(shake, monkeypatch):
         hairdyn.unregister()
         hairdyn.register()
     assert not hasattr(bpy.data.objects["Hair"].hairdyn, "test_pass")
-
-
-class Layout:
-    """Records the properties a panel draws (a stand-in for bpy's UILayout)."""
-
-    def __init__(self, shown):
-        self.shown = shown
-        self.active = self.enabled = self.use_property_split = True
-
-    def prop(self, data, name, **_):
-        self.shown.append(name)
-
-    def prop_search(self, data, name, *_args, **_kwargs):
-        self.shown.append(name)
-
-    def row(self, **_):
-        return self
-
-    column = row
-
-    def operator(self, *_args, **_kwargs):
-        return self
-
-    def label(self, **_):
-        pass
-
-    def template_list(self, *_args, **_kwargs):
-        pass
 
 
 @pytest.mark.parametrize(

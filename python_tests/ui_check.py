@@ -10,7 +10,9 @@ from pathlib import Path
 import bpy
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "addon"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 import hairdyn  # noqa: E402
+from layout_recorder import Layout  # noqa: E402
 
 object_name, out_json, out_png, cache_dir = sys.argv[sys.argv.index("--") + 1:][:4]
 BAKE_FRAMES = 10
@@ -58,36 +60,6 @@ def show_panel():
     return None
 
 
-class _Recorder:
-    """A stand-in UILayout that records the label text of every property a panel draws."""
-
-    def __init__(self, labels):
-        self.labels = labels
-        self.active = self.enabled = self.use_property_split = True
-
-    def prop(self, data, name, text=None, **_):
-        label = data.bl_rna.properties[name].name if text is None else text
-        if label:
-            self.labels.add(label)
-
-    def prop_search(self, data, name, *_args, text=None, **_kwargs):
-        self.prop(data, name, text=text)
-
-    def row(self, **_):
-        return self
-
-    column = split = box = row
-
-    def operator(self, *_args, **_kwargs):
-        return self
-
-    def label(self, **_):
-        pass
-
-    def template_list(self, *_args, **_kwargs):
-        pass
-
-
 def label_width(text):
     """Pixels the properties editor's widget font draws `text` in, at this window's scale."""
     import blf
@@ -109,14 +81,14 @@ def cut_labels(region):
 
     scale = bpy.context.preferences.system.ui_scale
     available = 0.4 * (region.width - 2 * 20 * scale) - 8 * scale
-    labels = set()
+    labels = []
     settings = bpy.data.objects[object_name].hairdyn
     for method in methods.all_methods():
         settings.method = method.identifier
         for panel in ui.panel_classes():
             if hasattr(panel, "draw_settings"):
-                panel.draw_settings(None, _Recorder(labels), settings)
-    widths = {label: label_width(label) for label in sorted(labels)}
+                panel.draw_settings(None, Layout([], labels), settings)
+    widths = {label: label_width(label) for label in sorted(set(labels))}
     result["label_column_px"] = available
     result["widest_label"] = max(widths.items(), key=lambda item: item[1])
     result["label_widths"] = widths
