@@ -52,6 +52,16 @@ struct Body {
   vec2 u;                   /* τ − Sᵀ p^A */
 };
 
+/* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
+ * rod's is nearly 0, but a segment never spins by itself: a hinge turns it about its own
+ * axis only near the chart's pole (θ = ±π/2, where φ̇ just twists the segment), and there a
+ * near-zero inertia let φ̇ grow without bound for a finite motion: the chain ran away (a
+ * strand blown flat against the head bends its first segment there). With the transverse
+ * inertia about its axis too, turning through the pole costs what any other turn does, as
+ * for Kurihara 1993's hinges (eq. 1: the same I for θ and φ); away from the pole the twist
+ * is φ̇ sin θ, so bending near rest is unchanged to second order. */
+constexpr float axial_inertia_share = 1.0f;
+
 thread_local std::vector<Body> bodies;
 thread_local std::vector<vec3> substep_start; /* a strand's nodes where a cut substep began */
 
@@ -174,13 +184,15 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     const vec3 force = segment_force(substep, i, center, center_velocity, tip, tip_velocity,
                                      wind_wo, pass_counts);
 
-    /* The rod's inertia about P_i; a sliver of inertia about its own axis (1e-4 of the
-     * transverse one) keeps D regular where a hinge axis meets the rod (θ = ±π/2). */
+    /* The rod's inertia about P_i: m d² / 3 about every axis through P_i, its own axis
+     * included (see axial_inertia_share), and the gyroscopic torque ω × (I ω) of that
+     * inertia. */
     const float transverse = m * d * d / 3.0f;
-    body.a = transverse * (mat3(1.0f) - 0.9999f * outer(t, t));
+    const float spinless = 1.0f - axial_inertia_share;
+    body.a = transverse * (mat3(1.0f) - spinless * outer(t, t));
     body.b = m * cross_matrix(half);
     body.c = mat3(m);
-    body.p_torque = -transverse * glm::dot(t, omega) * glm::cross(omega, t) -
+    body.p_torque = -(spinless * transverse) * glm::dot(t, omega) * glm::cross(omega, t) -
                     glm::cross(half, force);
     body.p_force = m * glm::cross(omega, glm::cross(omega, half)) - force;
 
