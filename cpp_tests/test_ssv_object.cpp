@@ -201,3 +201,57 @@ TEST(SsvObject, SegmentPenetrationShareCountsSegmentsThatCutABody)
   /* A tolerance deeper than half the blade counts nothing. */
   EXPECT_FLOAT_EQ(segment_penetration_share(offsets, x, colliders, 0.0011f), 0.0f);
 }
+
+namespace {
+
+/* The blade of SsvDynamics (2 mm thick, 10 cm square, centred 20 cm below the origin at
+ * x = 8 cm: its edge runs along y at x = 3 cm) and one segment a–b moving at va, vb: what the
+ * pass makes of it over a substep of 1/96 s. */
+struct EdgeResult {
+  vec3 tip;
+  int64_t pushed = 0, unresolved = 0;
+  float distance = 0.0f; /* from the segment's core to the blade */
+  float stretch = 0.0f;  /* change of the segment's length */
+};
+
+EdgeResult push_at_blade_edge(const vec3 &a, const vec3 &b, const vec3 &va, const vec3 &vb)
+{
+  ColliderSet colliders;
+  colliders.add(make_collider(test::box(vec3(0.05f, 0.05f, 0.001f)),
+                              glm::translate(mat4(1.0f), vec3(0.08f, 0.0f, -0.2f))));
+  SweptSphereParams params;
+  params.body_collision = BodyCollision::SweptSpheres;
+  params.thickness = 2e-4f;
+  SsvObjectPass pass(&colliders, params);
+  Strand strand;
+  strand.positions = { a, b };
+  strand.velocities = { va, vb };
+  strand.offsets.push_back(2);
+  pass.apply(strand.state(1.0f / 96.0f));
+  const std::vector<vec3> &x = strand.positions;
+  EdgeResult result;
+  result.tip = x[1];
+  result.pushed = pass.stats().pushed_num;
+  result.unresolved = pass.stats().unresolved_num;
+  result.distance = segment_mesh_distance(colliders.collider(0), x[0], x[1]);
+  result.stretch = std::abs(glm::length(x[1] - x[0]) - glm::length(b - a));
+  return result;
+}
+
+}  // namespace
+
+TEST(SsvObject, ASegmentHangingJustPastABladesEdgeIsLeftAlone)
+{
+  /* Dragged along +x, the segment's base has passed over the blade's edge and its tip hangs
+   * below the blade, just outside the edge (0.3 mm clear): nothing to push. Its part above
+   * the bottom face lies over the top face, farther behind the bottom face than the blade
+   * is thick; counted as met from the front (its closest point is level with the bottom
+   * face, beside the edge), the bottom face asked to push the base down through the blade
+   * and the tip was turned into it. */
+  const EdgeResult r =
+      push_at_blade_edge(vec3(0.0310f, 0.0f, -0.1868f), vec3(0.0290f, 0.0f, -0.2055f),
+                         vec3(0.112f, 0.0f, -0.001f), vec3(0.113f, 0.0f, -0.001f));
+  EXPECT_EQ(r.pushed, 0);
+  EXPECT_EQ(r.unresolved, 0);
+  EXPECT_EQ(r.tip, vec3(0.0290f, 0.0f, -0.2055f));
+}

@@ -126,6 +126,10 @@ struct Push {
   float need = -std::numeric_limits<float>::infinity();
   vec3 direction{0.0f};
   float s = 0.0f;
+  /* Over a face: some of the segment above the face lies within the radius of its plane
+   * or in front of it. False when all of it lies farther behind (the far side of a thin
+   * body, outside it). */
+  bool reaches_face = true;
 };
 
 /* §5.4: the penetration of segment a–b (radius r) into the body at one triangle, and the
@@ -161,6 +165,7 @@ Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const Ssv
     push.s = h0 < h1 ? s0 : s1;
     push.need = r - std::min(h0, h1);
     push.direction = n;
+    push.reaches_face = std::max(h0, h1) >= -r;
     return push;
   }
   const float d = contact.core.distance;
@@ -319,15 +324,24 @@ void SsvObjectPass::apply(const SubstepState &state)
                 contacts.clear();
                 bodies_[i].bvh.segment_contacts(a_o, b_o, (r + threshold) / f.scale, contacts);
                 for (const TriangleContact &contact : contacts) {
-                  /* Only faces the segment met from their front at the substep's start. */
-                  const float s = contact.core.s;
-                  const vec3 p_before_wo = glm::mix(a, b, s) - h * glm::mix(v[k], v[k + 1], s);
-                  const vec3 p_before_o = transform_point(f.previous_world_to_object, p_before_wo);
-                  const vec3 *t = bodies_[i].bvh.corners(contact.triangle);
-                  const bool from_front =
-                      glm::dot(p_before_o - t[0], bodies_[i].bvh.normal(contact.triangle)) >= -r_o;
                   const Push push = push_out_of_triangle(a_o, b_o, r_o, bodies_[i].bvh, contact);
                   if (push.need > -std::numeric_limits<float>::infinity()) {
+                    /* Only faces the segment met from their front at the substep's start:
+                     * its point closest to the triangle was in front then. A segment whose
+                     * part over a face lies all farther behind it than its radius (past a
+                     * thin body's edge, its closest point level with the far face and
+                     * its part over that face beyond the near one, outside the body) must
+                     * also have had the point the push moves in front. */
+                    const vec3 *t = bodies_[i].bvh.corners(contact.triangle);
+                    const vec3 &n_o = bodies_[i].bvh.normal(contact.triangle);
+                    const auto was_in_front = [&](const float s) {
+                      const vec3 p_before_wo = glm::mix(a, b, s) - h * glm::mix(v[k], v[k + 1], s);
+                      const vec3 p_before_o =
+                          transform_point(f.previous_world_to_object, p_before_wo);
+                      return glm::dot(p_before_o - t[0], n_o) >= -r_o;
+                    };
+                    const bool from_front = was_in_front(contact.core.s) &&
+                                            (push.reaches_face || was_in_front(push.s));
                     (from_front ? front : behind)
                         .add({push.need * f.scale,
                               glm::normalize(f.direction_to_world * push.direction), push.s});
