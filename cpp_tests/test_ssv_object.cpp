@@ -255,3 +255,18 @@ TEST(SsvObject, ASegmentHangingJustPastABladesEdgeIsLeftAlone)
   EXPECT_EQ(r.unresolved, 0);
   EXPECT_EQ(r.tip, vec3(0.0290f, 0.0f, -0.2055f));
 }
+
+TEST(SsvObject, ASegmentGrazingABladesEdgeTurnsALittleAndStaysBelow)
+{
+  /* The tip has come 0.3 mm past the edge below the blade: the segment cuts the edge by a
+   * fraction of a millimetre. It turns back a little and stays below; it is not mirrored
+   * in the top face's plane (which flips it over onto the blade). */
+  const EdgeResult r =
+      push_at_blade_edge(vec3(0.0324f, 0.0f, -0.1867f), vec3(0.0303f, 0.0f, -0.2054f),
+                         vec3(0.051f, 0.0f, 0.005f), vec3(0.156f, 0.0f, -0.009f));
+  EXPECT_EQ(r.pushed, 1);
+  EXPECT_EQ(r.unresolved, 0);
+  EXPECT_GE(r.distance, 0.999f * 2e-4f);
+  EXPECT_LT(r.tip.z, -0.201f) << "flipped over the edge";
+  EXPECT_LT(r.stretch, 1e-6f);
+}

@@ -203,8 +203,10 @@ struct Candidates {
 /* The tip of segment a–b (length kept) turned about a so that its point at push.s rises by
  * push.need along push.direction, to first order: the tip moves across the segment, along the
  * normal's component n⊥ perpendicular to it, by need / (s |n⊥|²). A segment pointing steeply
- * into the body (more than 60° from the surface) is mirrored in the surface's plane instead,
- * where the first-order turn would be too slow. */
+ * into the body (more than 60° from the surface) whose first-order turn would take the tip
+ * farther than the segment's length is mirrored in the surface's plane instead. A shallow
+ * push of a steep segment (its point grazing an edge) stays a small turn: mirrored, a
+ * segment hanging past a thin body's edge would flip over onto its top. */
 vec3 turn_out(const vec3 &a, const vec3 &b, const float length, const Push &push)
 {
   const vec3 n = push.direction;
@@ -214,16 +216,15 @@ vec3 turn_out(const vec3 &a, const vec3 &b, const float length, const Push &push
   }
   const vec3 u = (b - a) / len;
   const float along = glm::dot(u, n);
+  const vec3 across = n - along * u;
+  const float lever = std::max(push.s, 0.05f);
+  const float step = 1.01f * push.need / (lever * glm::dot(across, across)) + 1e-7f;
   vec3 direction;
-  if (along < -0.5f) {
+  if (along < -0.5f && !(step < length)) {
     direction = u - 2.0f * along * n;
   }
   else {
-    const vec3 across = n - along * u;
-    const float lever = std::max(push.s, 0.05f);
-    const float step = std::min(1.01f * push.need / (lever * glm::dot(across, across)) + 1e-7f,
-                                length);
-    direction = b + step * across - a;
+    direction = b + std::min(step, length) * across - a;
   }
   const float direction_len = glm::length(direction);
   return direction_len > 0.0f ? a + direction * (length / direction_len) : b;
