@@ -270,3 +270,20 @@ TEST(SsvObject, ASegmentGrazingABladesEdgeTurnsALittleAndStaysBelow)
   EXPECT_LT(r.tip.z, -0.201f) << "flipped over the edge";
   EXPECT_LT(r.stretch, 1e-6f);
 }
+
+TEST(SsvObject, ASegmentThatCrossedABladesEdgeWithinASubstepLeavesAcrossIt)
+{
+  /* The tip, pressed at 0.2 m/s against the edge from below-outside, crossed 2 mm into the
+   * blade within the substep, farther than the threshold from the edge face. The face it
+   * came through is within the distance it moved: it leaves across the edge, below, instead
+   * of being taken for a segment that pierced the top face and flipped over onto the blade. */
+  const EdgeResult r =
+      push_at_blade_edge(vec3(0.0363f, 0.0f, -0.1828f), vec3(0.0312f, 0.0f, -0.2008f),
+                         vec3(0.031f, 0.0f, 0.019f), vec3(0.196f, 0.0f, -0.035f));
+  EXPECT_EQ(r.pushed, 1);
+  EXPECT_EQ(r.unresolved, 0);
+  EXPECT_GE(r.distance, 0.999f * 2e-4f);
+  EXPECT_LT(r.tip.x, 0.03f) << "left across the edge";
+  EXPECT_LT(r.tip.z, -0.199f) << "flipped over the edge";
+  EXPECT_LT(r.stretch, 1e-6f);
+}
