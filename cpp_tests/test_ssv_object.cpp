@@ -287,3 +287,18 @@ TEST(SsvObject, ASegmentThatCrossedABladesEdgeWithinASubstepLeavesAcrossIt)
   EXPECT_LT(r.tip.z, -0.199f) << "flipped over the edge";
   EXPECT_LT(r.stretch, 1e-6f);
 }
+
+TEST(SsvObject, ASegmentDrapedOffABladeFromABaseRestingOnItIsResolved)
+{
+  /* The base rests on the blade (at the strand's radius above the top face); the segment
+   * runs over the side edge and down. Its real penetration is at the edge; the base's own
+   * contact is no penetration a turn could remove, and chosen as the shallowest it used up
+   * the iterations. */
+  const EdgeResult r =
+      push_at_blade_edge(vec3(0.1193f, 0.0389f, -0.1988f), vec3(0.1215f, 0.0573f, -0.2013f),
+                         vec3(-0.012f, -0.090f, 0.0f), vec3(0.011f, -0.096f, -0.244f));
+  EXPECT_EQ(r.pushed, 1);
+  EXPECT_EQ(r.unresolved, 0);
+  EXPECT_GE(r.distance, 0.99f * 2e-4f);
+  EXPECT_LT(r.stretch, 1e-6f);
+}

@@ -120,6 +120,10 @@ void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_dist
 
 namespace {
 
+/* The shortest lever (share of the segment's length) a turn about the base is computed
+ * with. */
+constexpr float min_lever = 0.05f;
+
 /* What one contact asks of a segment (object space): move the segment's point at
  * `s` by `need` along `direction` (need ≤ 0: within reach, not penetrating). */
 struct Push {
@@ -217,7 +221,7 @@ vec3 turn_out(const vec3 &a, const vec3 &b, const float length, const Push &push
   const vec3 u = (b - a) / len;
   const float along = glm::dot(u, n);
   const vec3 across = n - along * u;
-  const float lever = std::max(push.s, 0.05f);
+  const float lever = std::max(push.s, min_lever);
   const float step = 1.01f * push.need / (lever * glm::dot(across, across)) + 1e-7f;
   vec3 direction;
   if (along < -0.5f && !(step < length)) {
@@ -349,9 +353,15 @@ void SsvObjectPass::apply(const SubstepState &state)
                     };
                     const bool from_front = was_in_front(contact.core.s) &&
                                             (push.reaches_face || was_in_front(push.s));
+                    /* The base is placed: an overlap within the radius at the base (the
+                     * base resting on the surface) is contact, not a penetration a turn
+                     * about the base could remove; taken as the shallowest it would use up
+                     * the iterations on a segment whose real penetration lies farther
+                     * along. */
+                    const bool base_overlap = push.s <= min_lever && push.need <= r_o;
                     (from_front ? front : behind)
-                        .add({push.need * f.scale,
-                              glm::normalize(f.direction_to_world * push.direction), push.s});
+                        .add({ base_overlap ? 0.0f : push.need * f.scale,
+                               glm::normalize(f.direction_to_world * push.direction), push.s });
                   }
                 }
               }
