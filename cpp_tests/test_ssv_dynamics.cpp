@@ -17,7 +17,7 @@ namespace {
  * x over a horizontal blade 2 mm thick whose edge (x = 3 cm) stands 20 cm below the root: the
  * strand meets the edge and must bend around it. Returns the most segments cutting the blade
  * in one frame. */
-int64_t drag_across_blade(const BodyCollision mode)
+int64_t drag_across_blade(const BodyCollision mode, const StrandModel model)
 {
   const test::TestMesh box = test::box(vec3(0.05f, 0.05f, 0.001f));
   const ColliderMesh mesh(box.vertices, box.triangles);
@@ -33,6 +33,7 @@ int64_t drag_across_blade(const BodyCollision mode)
     positions.push_back(vec3(0.0f, 0.0f, -0.3f * float(i) / 16.0f));
   }
   StrandParams params;
+  params.model = model;
   StrandSolver solver(offsets, positions, mat4(1.0f), {}, params);
   SweptSphereParams ssv;
   ssv.body_collision = mode;
@@ -57,7 +58,11 @@ int64_t drag_across_blade(const BodyCollision mode)
 
 TEST(SsvDynamics, SweptSpheresStopASegmentCuttingAThinBlade)
 {
-  EXPECT_GT(drag_across_blade(BodyCollision::Maps), 0) << "node maps let a segment cut the blade";
-  EXPECT_EQ(drag_across_blade(BodyCollision::SweptSpheres), 0);
-  EXPECT_EQ(drag_across_blade(BodyCollision::Both), 0);
+  for (const StrandModel model : {StrandModel::Kurihara1993, StrandModel::Articulated}) {
+    SCOPED_TRACE(model == StrandModel::Articulated ? "articulated" : "kurihara1993");
+    EXPECT_GT(drag_across_blade(BodyCollision::Maps, model), 0)
+        << "node maps let a segment cut the blade";
+    EXPECT_EQ(drag_across_blade(BodyCollision::SweptSpheres, model), 0);
+    EXPECT_EQ(drag_across_blade(BodyCollision::Both, model), 0);
+  }
 }

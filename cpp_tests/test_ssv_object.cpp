@@ -201,3 +201,104 @@ TEST(SsvObject, SegmentPenetrationShareCountsSegmentsThatCutABody)
   /* A tolerance deeper than half the blade counts nothing. */
   EXPECT_FLOAT_EQ(segment_penetration_share(offsets, x, colliders, 0.0011f), 0.0f);
 }
+
+namespace {
+
+/* The blade of SsvDynamics (2 mm thick, 10 cm square, centred 20 cm below the origin at
+ * x = 8 cm: its edge runs along y at x = 3 cm) and one segment a–b moving at va, vb: what the
+ * pass makes of it over a substep of 1/96 s. */
+struct EdgeResult {
+  vec3 tip;
+  int64_t pushed = 0, unresolved = 0;
+  float distance = 0.0f; /* from the segment's core to the blade */
+  float stretch = 0.0f;  /* change of the segment's length */
+};
+
+EdgeResult push_at_blade_edge(const vec3 &a, const vec3 &b, const vec3 &va, const vec3 &vb)
+{
+  ColliderSet colliders;
+  colliders.add(make_collider(test::box(vec3(0.05f, 0.05f, 0.001f)),
+                              glm::translate(mat4(1.0f), vec3(0.08f, 0.0f, -0.2f))));
+  SweptSphereParams params;
+  params.body_collision = BodyCollision::SweptSpheres;
+  params.thickness = 2e-4f;
+  SsvObjectPass pass(&colliders, params);
+  Strand strand;
+  strand.positions = { a, b };
+  strand.velocities = { va, vb };
+  strand.offsets.push_back(2);
+  pass.apply(strand.state(1.0f / 96.0f));
+  const std::vector<vec3> &x = strand.positions;
+  EdgeResult result;
+  result.tip = x[1];
+  result.pushed = pass.stats().pushed_num;
+  result.unresolved = pass.stats().unresolved_num;
+  result.distance = segment_mesh_distance(colliders.collider(0), x[0], x[1]);
+  result.stretch = std::abs(glm::length(x[1] - x[0]) - glm::length(b - a));
+  return result;
+}
+
+}  // namespace
+
+TEST(SsvObject, ASegmentHangingJustPastABladesEdgeIsLeftAlone)
+{
+  /* Dragged along +x, the segment's base has passed over the blade's edge and its tip hangs
+   * below the blade, just outside the edge (0.3 mm clear): nothing to push. Its part above
+   * the bottom face lies over the top face, farther behind the bottom face than the blade
+   * is thick; counted as met from the front (its closest point is level with the bottom
+   * face, beside the edge), the bottom face asked to push the base down through the blade
+   * and the tip was turned into it. */
+  const EdgeResult r =
+      push_at_blade_edge(vec3(0.0310f, 0.0f, -0.1868f), vec3(0.0290f, 0.0f, -0.2055f),
+                         vec3(0.112f, 0.0f, -0.001f), vec3(0.113f, 0.0f, -0.001f));
+  EXPECT_EQ(r.pushed, 0);
+  EXPECT_EQ(r.unresolved, 0);
+  EXPECT_EQ(r.tip, vec3(0.0290f, 0.0f, -0.2055f));
+}
+
+TEST(SsvObject, ASegmentGrazingABladesEdgeTurnsALittleAndStaysBelow)
+{
+  /* The tip has come 0.3 mm past the edge below the blade: the segment cuts the edge by a
+   * fraction of a millimetre. It turns back a little and stays below; it is not mirrored
+   * in the top face's plane (which flips it over onto the blade). */
+  const EdgeResult r =
+      push_at_blade_edge(vec3(0.0324f, 0.0f, -0.1867f), vec3(0.0303f, 0.0f, -0.2054f),
+                         vec3(0.051f, 0.0f, 0.005f), vec3(0.156f, 0.0f, -0.009f));
+  EXPECT_EQ(r.pushed, 1);
+  EXPECT_EQ(r.unresolved, 0);
+  EXPECT_GE(r.distance, 0.999f * 2e-4f);
+  EXPECT_LT(r.tip.z, -0.201f) << "flipped over the edge";
+  EXPECT_LT(r.stretch, 1e-6f);
+}
+
+TEST(SsvObject, ASegmentThatCrossedABladesEdgeWithinASubstepLeavesAcrossIt)
+{
+  /* The tip, pressed at 0.2 m/s against the edge from below-outside, crossed 2 mm into the
+   * blade within the substep, farther than the threshold from the edge face. The face it
+   * came through is within the distance it moved: it leaves across the edge, below, instead
+   * of being taken for a segment that pierced the top face and flipped over onto the blade. */
+  const EdgeResult r =
+      push_at_blade_edge(vec3(0.0363f, 0.0f, -0.1828f), vec3(0.0312f, 0.0f, -0.2008f),
+                         vec3(0.031f, 0.0f, 0.019f), vec3(0.196f, 0.0f, -0.035f));
+  EXPECT_EQ(r.pushed, 1);
+  EXPECT_EQ(r.unresolved, 0);
+  EXPECT_GE(r.distance, 0.999f * 2e-4f);
+  EXPECT_LT(r.tip.x, 0.03f) << "left across the edge";
+  EXPECT_LT(r.tip.z, -0.199f) << "flipped over the edge";
+  EXPECT_LT(r.stretch, 1e-6f);
+}
+
+TEST(SsvObject, ASegmentDrapedOffABladeFromABaseRestingOnItIsResolved)
+{
+  /* The base rests on the blade (at the strand's radius above the top face); the segment
+   * runs over the side edge and down. Its real penetration is at the edge; the base's own
+   * contact is no penetration a turn could remove, and chosen as the shallowest it used up
+   * the iterations. */
+  const EdgeResult r =
+      push_at_blade_edge(vec3(0.1193f, 0.0389f, -0.1988f), vec3(0.1215f, 0.0573f, -0.2013f),
+                         vec3(-0.012f, -0.090f, 0.0f), vec3(0.011f, -0.096f, -0.244f));
+  EXPECT_EQ(r.pushed, 1);
+  EXPECT_EQ(r.unresolved, 0);
+  EXPECT_GE(r.distance, 0.99f * 2e-4f);
+  EXPECT_LT(r.stretch, 1e-6f);
+}

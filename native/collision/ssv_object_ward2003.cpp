@@ -120,12 +120,20 @@ void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_dist
 
 namespace {
 
+/* The shortest lever (share of the segment's length) a turn about the base is computed
+ * with. */
+constexpr float min_lever = 0.05f;
+
 /* What one contact asks of a segment (object space): move the segment's point at
  * `s` by `need` along `direction` (need ≤ 0: within reach, not penetrating). */
 struct Push {
   float need = -std::numeric_limits<float>::infinity();
   vec3 direction{0.0f};
   float s = 0.0f;
+  /* Over a face: some of the segment above the face lies within the radius of its plane
+   * or in front of it. False when all of it lies farther behind (the far side of a thin
+   * body, outside it). */
+  bool reaches_face = true;
 };
 
 /* §5.4: the penetration of segment a–b (radius r) into the body at one triangle, and the
@@ -161,6 +169,7 @@ Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const Ssv
     push.s = h0 < h1 ? s0 : s1;
     push.need = r - std::min(h0, h1);
     push.direction = n;
+    push.reaches_face = std::max(h0, h1) >= -r;
     return push;
   }
   const float d = contact.core.distance;
@@ -179,6 +188,7 @@ Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const Ssv
  * is restricted; each iteration removes the shallowest penetration (a segment through a thin
  * body near its edge leaves it across the edge, not through its far face). */
 struct Candidates {
+  float radius = 0.0f;
   bool any = false;
   Push deepest;
   Push shallowest; /* of the penetrating ones (need > 0) */
@@ -189,7 +199,11 @@ struct Candidates {
     if (push.need > deepest.need) {
       deepest = push;
     }
-    if (push.need > 0.0f && (!(shallowest.need > 0.0f) || push.need < shallowest.need)) {
+    /* A push at the base deeper than the radius cannot be made by turning about the base:
+     * it says how deep the segment is, not where to turn it. */
+    const bool turnable = push.s > min_lever || push.need <= radius;
+    if (turnable && push.need > 0.0f &&
+        (!(shallowest.need > 0.0f) || push.need < shallowest.need)) {
       shallowest = push;
     }
   }
@@ -198,8 +212,10 @@ struct Candidates {
 /* The tip of segment a–b (length kept) turned about a so that its point at push.s rises by
  * push.need along push.direction, to first order: the tip moves across the segment, along the
  * normal's component n⊥ perpendicular to it, by need / (s |n⊥|²). A segment pointing steeply
- * into the body (more than 60° from the surface) is mirrored in the surface's plane instead,
- * where the first-order turn would be too slow. */
+ * into the body (more than 60° from the surface) whose first-order turn would take the tip
+ * farther than the segment's length is mirrored in the surface's plane instead. A shallow
+ * push of a steep segment (its point grazing an edge) stays a small turn: mirrored, a
+ * segment hanging past a thin body's edge would flip over onto its top. */
 vec3 turn_out(const vec3 &a, const vec3 &b, const float length, const Push &push)
 {
   const vec3 n = push.direction;
@@ -209,16 +225,15 @@ vec3 turn_out(const vec3 &a, const vec3 &b, const float length, const Push &push
   }
   const vec3 u = (b - a) / len;
   const float along = glm::dot(u, n);
+  const vec3 across = n - along * u;
+  const float lever = std::max(push.s, min_lever);
+  const float step = 1.01f * push.need / (lever * glm::dot(across, across)) + 1e-7f;
   vec3 direction;
-  if (along < -0.5f) {
+  if (along < -0.5f && !(step < length)) {
     direction = u - 2.0f * along * n;
   }
   else {
-    const vec3 across = n - along * u;
-    const float lever = std::max(push.s, 0.05f);
-    const float step = std::min(1.01f * push.need / (lever * glm::dot(across, across)) + 1e-7f,
-                                length);
-    direction = b + step * across - a;
+    direction = b + std::min(step, length) * across - a;
   }
   const float direction_len = glm::length(direction);
   return direction_len > 0.0f ? a + direction * (length / direction_len) : b;
@@ -252,8 +267,12 @@ void SsvObjectPass::apply(const SubstepState &state)
   const MutableSpan<vec3> x = state.positions_wo;
   const MutableSpan<vec3> v = state.velocities_wo;
   const bool have_previous = int64_t(previous_velocities_.size()) == v.size();
-  if (!params_.uses_swept_spheres() || colliders_ == nullptr || bodies_.empty()) {
+  const auto keep_previous = [&]() {
     previous_velocities_.assign(v.begin(), v.end());
+    previous_positions_.assign(x.begin(), x.end());
+  };
+  if (!params_.uses_swept_spheres() || colliders_ == nullptr || bodies_.empty()) {
+    keep_previous();
     return;
   }
   if (int64_t(bodies_.size()) != colliders_->colliders_num()) {
@@ -304,33 +323,59 @@ void SsvObjectPass::apply(const SubstepState &state)
               }
             }
             const vec3 v_tip_before = v[k + 1];
+            /* How far the segment moved in the substep: a face it crossed within the substep
+             * is within that reach of it even when it went deeper than the threshold (a node
+             * pressed at 0.2 m/s into a thin body's edge crosses 2 mm per 1/96 s), and the
+             * face it came through is the one to leave by. */
+            const float swept = h * std::max(glm::length(v[k]), glm::length(v[k + 1]));
             bool pushed = false, resolved = false;
             Push deepest_wo;
             for (int iteration = 0; iteration <= iterations_num; iteration++) {
               const vec3 b = x[k + 1];
               /* Faces met from behind count only when no face within reach was met from the
                * front (the segment was inside before: it still goes out along the normal). */
-              Candidates front, behind;
+              Candidates front{r}, behind{r};
               for (size_t i = 0; i < bodies_.size(); i++) {
                 const Frame &f = frames[i];
                 const vec3 a_o = transform_point(f.world_to_object, a);
                 const vec3 b_o = transform_point(f.world_to_object, b);
                 const float r_o = r / f.scale;
                 contacts.clear();
-                bodies_[i].bvh.segment_contacts(a_o, b_o, (r + threshold) / f.scale, contacts);
+                bodies_[i].bvh.segment_contacts(a_o, b_o, (r + threshold + swept) / f.scale,
+                                                contacts);
                 for (const TriangleContact &contact : contacts) {
-                  /* Only faces the segment met from their front at the substep's start. */
-                  const float s = contact.core.s;
-                  const vec3 p_before_wo = glm::mix(a, b, s) - h * glm::mix(v[k], v[k + 1], s);
-                  const vec3 p_before_o = transform_point(f.previous_world_to_object, p_before_wo);
-                  const vec3 *t = bodies_[i].bvh.corners(contact.triangle);
-                  const bool from_front =
-                      glm::dot(p_before_o - t[0], bodies_[i].bvh.normal(contact.triangle)) >= -r_o;
                   const Push push = push_out_of_triangle(a_o, b_o, r_o, bodies_[i].bvh, contact);
                   if (push.need > -std::numeric_limits<float>::infinity()) {
+                    /* Only faces the segment met from their front at the substep's start:
+                     * its point closest to the triangle was in front then. A segment whose
+                     * part over a face lies all farther behind it than its radius (past a
+                     * thin body's edge, its closest point level with the far face and
+                     * its part over that face beyond the near one, outside the body) must
+                     * also have had the point the push moves in front. */
+                    const vec3 *t = bodies_[i].bvh.corners(contact.triangle);
+                    const vec3 &n_o = bodies_[i].bvh.normal(contact.triangle);
+                    const auto was_in_front = [&](const float s) {
+                      /* Where the point was at the substep's start: as the last substep
+                       * left it, or (on the first) back along its velocity. */
+                      const vec3 p_before_wo =
+                          have_previous ? glm::mix(previous_positions_[size_t(k)],
+                                                   previous_positions_[size_t(k) + 1], s) :
+                                          glm::mix(a, b, s) - h * glm::mix(v[k], v[k + 1], s);
+                      const vec3 p_before_o =
+                          transform_point(f.previous_world_to_object, p_before_wo);
+                      return glm::dot(p_before_o - t[0], n_o) >= -r_o;
+                    };
+                    const bool from_front = was_in_front(contact.core.s) &&
+                                            (push.reaches_face || was_in_front(push.s));
+                    /* The base is placed: an overlap within the radius at the base (the
+                     * base resting on the surface) is contact, not a penetration a turn
+                     * about the base could remove; taken as the shallowest it would use up
+                     * the iterations on a segment whose real penetration lies farther
+                     * along. */
+                    const bool base_overlap = push.s <= min_lever && push.need <= r_o;
                     (from_front ? front : behind)
-                        .add({push.need * f.scale,
-                              glm::normalize(f.direction_to_world * push.direction), push.s});
+                        .add({ base_overlap ? 0.0f : push.need * f.scale,
+                               glm::normalize(f.direction_to_world * push.direction), push.s });
                   }
                 }
               }
@@ -340,13 +385,17 @@ void SsvObjectPass::apply(const SubstepState &state)
                 resolved = true;
                 break;
               }
-              if (iteration == iterations_num) {
+              /* The turn: the shallowest of the faces met from the front, else of those met
+               * from behind. */
+              const Push &turn = used.shallowest.need > 0.0f ? used.shallowest :
+                                                               behind.shallowest;
+              if (iteration == iterations_num || !(turn.need > 0.0f)) {
                 break;
               }
               /* §5.4: push the segment out along the normal by its penetration; its base is
                * placed, so its tip turns about it (a little past, to stop on the surface). */
               pushed = true;
-              x[k + 1] = turn_out(a, b, length, used.shallowest);
+              x[k + 1] = turn_out(a, b, length, turn);
             }
             local.pushed += pushed ? 1 : 0;
             local.unresolved += resolved ? 0 : 1;
@@ -382,7 +431,7 @@ void SsvObjectPass::apply(const SubstepState &state)
     body.previous_object_to_world = body.collider->object_to_world();
     body.has_previous = true;
   }
-  previous_velocities_.assign(v.begin(), v.end());
+  keep_previous();
   stats_.pushed_num += counts.pushed;
   stats_.near_num += counts.near;
   stats_.unresolved_num += counts.unresolved;

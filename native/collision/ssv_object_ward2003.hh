@@ -111,6 +111,7 @@ class SsvObjectPass : public SubstepPass {
   SweptSphereParams params_;
   std::vector<Body> bodies_;
   std::vector<vec3> previous_velocities_; /* per point, at the end of the last apply */
+  std::vector<vec3> previous_positions_;  /* per point, at the end of the last apply */
   HairObjectStats stats_;
 };
 

@@ -28,6 +28,7 @@
  * inertia D_i (the "armature" of Featherstone §7.3): still one O(N) pass, unconditionally
  * stable in the springs and damping. Gravity, drag, head forces and the velocity products
  * stay explicit. */
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -51,7 +52,18 @@ struct Body {
   vec2 u;                   /* τ − Sᵀ p^A */
 };
 
+/* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
+ * rod's is nearly 0, but a segment never spins by itself: a hinge turns it about its own
+ * axis only near the chart's pole (θ = ±π/2, where φ̇ just twists the segment), and there a
+ * near-zero inertia let φ̇ grow without bound for a finite motion: the chain ran away (a
+ * strand blown flat against the head bends its first segment there). With the transverse
+ * inertia about its axis too, turning through the pole costs what any other turn does, as
+ * for Kurihara 1993's hinges (eq. 1: the same I for θ and φ); away from the pole the twist
+ * is φ̇ sin θ, so bending near rest is unchanged to second order. */
+constexpr float axial_inertia_share = 1.0f;
+
 thread_local std::vector<Body> bodies;
+thread_local std::vector<vec3> substep_start; /* a strand's nodes where a cut substep began */
 
 inline mat3 outer(const vec3 &x, const vec3 &y)
 {
@@ -63,6 +75,62 @@ inline mat3 outer(const vec3 &x, const vec3 &y)
 bool StrandSolver::advance_articulated(const IndexRange points, const Substep &substep,
                                        const mat3 &root_frame, const vec3 &wind_wo,
                                        Counts &counts)
+{
+  /* The velocity products are explicit: a segment that turns by more than about a radian in
+   * one step (a pass's push of a few m/s on a 1 cm segment does) feeds its centripetal and
+   * gyroscopic terms from a direction it has long left, and the chain runs away. Such a
+   * strand takes shorter steps, each short enough that no turn exceeds max_turn_per_step,
+   * down to substep.h / max_turn_steps; the head's pose and forces stay the substep's (the
+   * root is already placed). A strand that turns slowly takes the substep in one step. */
+  const float shortest = substep.h / float(max_turn_steps);
+  Substep step = substep;
+  float remaining = substep.h;
+  bool split_any = false;
+  while (remaining > 0.0f) {
+    /* The last step takes what remains (rounding leaves no sliver of a step). */
+    const float h = remaining <= 1.001f * step.h ? remaining : step.h;
+    if (h != step.h) {
+      step.h = h;
+      if (colliders_ != nullptr) {
+        step.reaction = ReactionConstants::from(collision_params_, h);
+      }
+    }
+    int split = 1;
+    if (!articulated_step(points, step, root_frame, wind_wo, counts,
+                          h > shortest * 1.5f ? &split : nullptr))
+    {
+      return false;
+    }
+    if (split > 1) {
+      if (!split_any) {
+        /* The nodes where the substep started: the velocity it hands on is its mean,
+         * (x − x_start) / h, as for a substep taken in one step (the passes read x − h v as
+         * where a node was). */
+        split_any = true;
+        substep_start.assign(positions_wo_.begin() + points.start,
+                             positions_wo_.begin() + points.one_after_last());
+      }
+      step.h = std::max(h / float(split), shortest);
+      if (colliders_ != nullptr) {
+        step.reaction = ReactionConstants::from(collision_params_, step.h);
+      }
+      continue;
+    }
+    remaining = h == remaining ? 0.0f : remaining - h;
+  }
+  if (split_any) {
+    const float inv_h = 1.0f / substep.h;
+    for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+      velocities_wo_[size_t(i)] =
+          (positions_wo_[size_t(i)] - substep_start[size_t(i - points.start)]) * inv_h;
+    }
+  }
+  return true;
+}
+
+bool StrandSolver::articulated_step(const IndexRange points, const Substep &substep,
+                                    const mat3 &root_frame, const vec3 &wind_wo, Counts &counts,
+                                    int *r_steps)
 {
   const float h = substep.h;
   const float inv_h = 1.0f / h;
@@ -80,6 +148,8 @@ bool StrandSolver::advance_articulated(const IndexRange points, const Substep &s
   vec3 node_velocity(0.0f);   /* relative to the head */
   vec3 parent_omega(0.0f);    /* relative to the head */
   vec3 arm(0.0f);
+  float fastest_turn = 0.0f; /* rad/s, of a segment or across a hinge */
+  Counts pass_counts;        /* the contacts of a step that is taken */
   for (size_t i = first; i < end; i++) {
     Body &body = bodies[i - first];
     const float d = rest_lengths_[i];
@@ -99,6 +169,8 @@ bool StrandSolver::advance_articulated(const IndexRange points, const Substep &s
     node += arm;
     node_velocity += glm::cross(parent_omega, arm);
     const vec3 omega = parent_omega + relative_turn;
+    fastest_turn =
+        std::max(fastest_turn, std::max(glm::length(omega), glm::length(relative_turn)));
 
     /* The external force at the centre (Kurihara 1993, eq. 6; reaction constraint eq. 12–15
      * where the tip is inside a collider), from world velocities. */
@@ -110,21 +182,29 @@ bool StrandSolver::advance_articulated(const IndexRange points, const Substep &s
     const vec3 tip_velocity = node_velocity + glm::cross(omega, d * t) +
                               substep.head_velocity.of_point(tip - head_center);
     const vec3 force = segment_force(substep, i, center, center_velocity, tip, tip_velocity,
-                                     wind_wo, counts);
+                                     wind_wo, pass_counts);
 
-    /* The rod's inertia about P_i; a sliver of inertia about its own axis (1e-4 of the
-     * transverse one) keeps D regular where a hinge axis meets the rod (θ = ±π/2). */
+    /* The rod's inertia about P_i: m d² / 3 about every axis through P_i, its own axis
+     * included (see axial_inertia_share), and the gyroscopic torque ω × (I ω) of that
+     * inertia. */
     const float transverse = m * d * d / 3.0f;
-    body.a = transverse * (mat3(1.0f) - 0.9999f * outer(t, t));
+    const float spinless = 1.0f - axial_inertia_share;
+    body.a = transverse * (mat3(1.0f) - spinless * outer(t, t));
     body.b = m * cross_matrix(half);
     body.c = mat3(m);
-    body.p_torque = -transverse * glm::dot(t, omega) * glm::cross(omega, t) -
+    body.p_torque = -(spinless * transverse) * glm::dot(t, omega) * glm::cross(omega, t) -
                     glm::cross(half, force);
     body.p_force = m * glm::cross(omega, glm::cross(omega, half)) - force;
 
     parent_omega = omega;
     arm = d * t;
   }
+
+  if (r_steps != nullptr && h * fastest_turn > max_turn_per_step) {
+    *r_steps = std::min(int(std::ceil(h * fastest_turn / max_turn_per_step)), max_turn_steps);
+    return true;
+  }
+  counts.contacts += pass_counts.contacts;
 
   /* Pass 2, tip to root (Table 7.1, second loop): U = I^A S, D = Sᵀ U + armature,
    * u = τ − Sᵀ p^A; the body's articulated inertia and bias less what its hinge absorbs,

@@ -280,8 +280,19 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
   /* What the passes changed (positions_before_, velocities_before_ hold the nodes as the
    * strands left them) comes back root to tip: a moved node turns its segment toward it about
    * the segment's (possibly moved) root, the same swing as the collision projection, and a
-   * change of velocity relative to the parent node changes the hinge's rates,
-   * Δ(v − v_node) = d (Δθ̇ e_θ + Δφ̇ cos θ e_φ). A strand the passes left alone keeps its bits. */
+   * change of a node's velocity changes its hinge's rates.
+   *
+   * The rates are relative to the parent segment, which carries everything distal to it (in
+   * both models a segment's frame is its parent's frame times its own deflection): segment i
+   * turns at Ω_i = Ω_{i-1} + θ̇ e_φ − φ̇ x (x the chart's pole), and its tip moves at
+   * v_i = v_{i-1} + d Ω_i × t = v_{i-1} + d Ω_{i-1} × t + d (θ̇ e_θ + φ̇ cos θ e_φ). So a hinge
+   * takes only the part of its node's change that its parents' new rates do not already
+   * give: with ΔΩ and Δv̂ the changes the new rates make up to the parent,
+   *   d (Δθ̇ e_θ + Δφ̇ cos θ e_φ) = Δv_i − (Δv̂_{i-1} + d ΔΩ_{i-1} × t).
+   * (Taking Δv_i − Δv_{i-1} instead gives a pass's uniform push to the first hinge and again
+   * to every hinge below it: the tip of a strand of n segments would move n times as fast.)
+   * The along-segment part of a change, which no rate can give, is dropped and not passed on.
+   * A strand the passes left alone keeps its bits. */
   const IndexRange points = curve_points(curve_offsets_, curve);
   const size_t root = size_t(points.start);
   mat3 frame = substep.rotation * root_frames_head_[size_t(curve)];
@@ -289,7 +300,8 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
   positions_wo_[root] = node;
   velocities_wo_[root] = velocities_before_[root];
   bool moved = false;
-  vec3 parent_delta_v(0.0f);
+  vec3 parent_delta_omega(0.0f); /* ΔΩ_{i-1}, rad/s */
+  vec3 parent_delta_v(0.0f);     /* Δv̂_{i-1}, m/s */
   for (size_t i = root + 1; i < size_t(points.one_after_last()); i++) {
     const float d = rest_lengths_[i];
     const mat3 chart = frame * rest_rotations_[i];
@@ -305,15 +317,20 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
     const Deflection deflection(trig_[i]);
     frame = deflection.rotate(chart);
     const vec3 delta_v = velocities_wo_[i] - velocities_before_[i];
-    if (delta_v != parent_delta_v) {
-      const vec3 own = (delta_v - parent_delta_v) / d;
-      vec2 &omega = angular_velocities_[i];
-      omega.x += glm::dot(own, frame[0]);
-      if (deflection.cos_theta > 1e-3f) {
-        omega.y += glm::dot(own, frame[1]) / deflection.cos_theta;
-      }
+    const vec3 carried = parent_delta_v + d * glm::cross(parent_delta_omega, frame[2]);
+    if (delta_v != carried) {
+      const vec3 own = (delta_v - carried) / d;
+      /* Δφ̇ = (own · e_φ) / cos θ; at the chart's pole φ is undefined and takes nothing. */
+      const float c = deflection.cos_theta;
+      const float along_phi = c > 1e-3f ? glm::dot(own, frame[1]) : 0.0f;
+      const vec2 delta_rate(glm::dot(own, frame[0]), c > 1e-3f ? along_phi / c : 0.0f);
+      angular_velocities_[i] += delta_rate;
+      parent_delta_omega += delta_rate.x * frame[1] - delta_rate.y * chart[0];
+      parent_delta_v = carried + d * (delta_rate.x * frame[0] + along_phi * frame[1]);
     }
-    parent_delta_v = delta_v;
+    else {
+      parent_delta_v = carried;
+    }
     if (moved) {
       positions_wo_[i] = node + d * frame[2];
     }

@@ -132,6 +132,11 @@ class StrandSolver {
    * by the head, so no NaN ever leaves the solver; the caller should fail the frame. */
   int64_t diverged_num() const { return diverged_num_; }
   static constexpr float runaway_speed = 1000.0f; /* m/s: no hair moves this fast. */
+  /* rad: the most an articulated segment may turn (or turn against its parent) in one step
+   * of its explicit velocity products; a faster strand takes up to max_turn_steps shorter
+   * steps in a substep. */
+  static constexpr float max_turn_per_step = 0.1f;
+  static constexpr int max_turn_steps = 1024;
 
   const glm::dvec3 &origin() const { return origin_wo_; }
   /* m, the shortest segment of the groom (what single precision must resolve). */
@@ -187,9 +192,15 @@ class StrandSolver {
                         vec3 node_velocity, const vec3 &wind_wo, Counts &counts);
   /* False when a node of the strand is not finite or faster than runaway_speed. */
   bool strand_is_sane(int64_t curve) const;
-  /* The articulated chain (strand_dynamics_articulated.cpp). */
+  /* The articulated chain (strand_dynamics_articulated.cpp): one substep, cut into shorter
+   * steps while a segment turns fast (see articulated_step). */
   bool advance_articulated(IndexRange points, const Substep &substep, const mat3 &root_frame,
                            const vec3 &wind_wo, Counts &counts);
+  /* One step of substep.h. With `r_steps` given, a strand that turns more than
+   * max_turn_per_step within it is left unchanged and *r_steps is set to the number of
+   * equal steps that keep every turn within the bound (at most max_turn_steps). */
+  bool articulated_step(IndexRange points, const Substep &substep, const mat3 &root_frame,
+                        const vec3 &wind_wo, Counts &counts, int *r_steps);
   /* Positions and velocities after passes back into angles and rates, root to tip. */
   void take_back_strand(int64_t curve, const Substep &substep);
 
