@@ -131,7 +131,7 @@ def test_every_binding_survives_hostile_input(seed, tmp_path):
         capture_output=True,
         text=True,
         timeout=600,
-        env={"OMP_NUM_THREADS": "1", "PATH": "/usr/bin:/bin"},
+        env={"PATH": "/usr/bin:/bin"},
     )
     last = result.stdout.strip().splitlines()[-1:] or ["(nothing)"]
     assert result.returncode == 0 and last == ["fuzz done"], (

@@ -1,5 +1,4 @@
 """Loads hairdyn._native lazily and says in one sentence why it is unusable, if it is."""
-import os
 import sys
 from pathlib import Path
 
@@ -31,10 +30,6 @@ def status():
 
 
 def _import():
-    # The native loops use OpenMP. Inside Blender, whose own thread pool shares the cores,
-    # OpenMP threads must sleep between loops rather than spin, or they slow Blender and each
-    # other down (measured: 0.5 ms vs 6 ms per frame). libgomp reads this when it loads.
-    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     from . import _native
 
     return _native

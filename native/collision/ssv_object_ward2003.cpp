@@ -188,7 +188,8 @@ Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const Ssv
  * is restricted; each iteration removes the shallowest penetration (a segment through a thin
  * body near its edge leaves it across the edge, not through its far face). */
 struct Candidates {
-  float radius = 0.0f;
+  explicit Candidates(const float strand_radius) : radius(strand_radius) {}
+  float radius; /* m, world */
   bool any = false;
   Push deepest;
   Push shallowest; /* of the penetrating ones (need > 0) */
@@ -334,7 +335,7 @@ void SsvObjectPass::apply(const SubstepState &state)
               const vec3 b = x[k + 1];
               /* Faces met from behind count only when no face within reach was met from the
                * front (the segment was inside before: it still goes out along the normal). */
-              Candidates front{r}, behind{r};
+              Candidates front(r), behind(r);
               for (size_t i = 0; i < bodies_.size(); i++) {
                 const Frame &f = frames[i];
                 const vec3 a_o = transform_point(f.world_to_object, a);

@@ -3,11 +3,33 @@
  * the thread count or on scheduling: bakes are byte-identical run to run. */
 #include <algorithm>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "core/span.hh"
 
 namespace hairdyn {
+
+/* A reference to a callable taking a chunk index (no allocation; the callable must outlive
+ * the call). */
+class ChunkFn {
+ public:
+  template<typename F, typename = std::enable_if_t<!std::is_same_v<std::decay_t<F>, ChunkFn>>>
+  ChunkFn(const F &fn)
+      : object_(&fn), call_([](const void *object, const int64_t chunk) {
+          (*static_cast<const F *>(object))(chunk);
+        })
+  {
+  }
+  void operator()(const int64_t chunk) const { call_(object_, chunk); }
+
+ private:
+  const void *object_;
+  void (*call_)(const void *, int64_t);
+};
+
+/* chunk_fn(chunk) for every chunk in [0, chunks), on the thread pool (parallel.cpp). */
+void run_chunks(int64_t chunks, const ChunkFn &chunk_fn);
 
 /* Calls fn(IndexRange) over chunks of at least `grain` items covering [0, size). */
 template<typename Fn> void parallel_for(int64_t size, int64_t grain, const Fn &fn)
@@ -21,11 +43,10 @@ template<typename Fn> void parallel_for(int64_t size, int64_t grain, const Fn &f
     fn(IndexRange{0, size});
     return;
   }
-#pragma omp parallel for schedule(static, 1)
-  for (int64_t chunk = 0; chunk < chunks; chunk++) {
+  run_chunks(chunks, [&](const int64_t chunk) {
     const int64_t start = chunk * grain;
     fn(IndexRange{start, std::min(grain, size - start)});
-  }
+  });
 }
 
 /* fn(range) over the same static chunks as parallel_for, the chunks' results folded with
@@ -44,11 +65,10 @@ T parallel_reduce(int64_t size, int64_t grain, const T &identity, const Fn &fn,
     return combine(identity, fn(IndexRange{0, size}));
   }
   std::vector<T> partial(size_t(chunks), identity);
-#pragma omp parallel for schedule(static, 1)
-  for (int64_t chunk = 0; chunk < chunks; chunk++) {
+  run_chunks(chunks, [&](const int64_t chunk) {
     const int64_t start = chunk * grain;
     partial[size_t(chunk)] = fn(IndexRange{start, std::min(grain, size - start)});
-  }
+  });
   T result = identity;
   for (const T &value : partial) {
     result = combine(result, value);

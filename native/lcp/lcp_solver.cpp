@@ -39,12 +39,12 @@ vec3 LcpSolver::fictitious_acceleration(const int64_t i) const
 LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
                      const mat4 &head_to_world_rest, const WindParams &wind)
     : params_(params),
-      wind_params_(wind),
-      wind_(wind),
       head_rest_(HeadPose::from_matrix(head_to_world_rest)),
       u_(particles_wo.u),
       v_(particles_wo.v),
-      s_(particles_wo.s)
+      s_(particles_wo.s),
+      wind_params_(wind),
+      wind_(wind)
 {
   const int64_t n = particles_wo.size();
   const mat3 to_head = glm::transpose(head_rest_.rotation_matrix());
