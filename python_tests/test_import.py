@@ -177,3 +177,83 @@ def test_implausible_groom_sizes_are_warned_about(tmp_path, empty_scene):
             assert not size_notes
         else:
             assert size_notes and expect in size_notes[0]
+
+
+def cap_groom(radius, strands_num=60, points=6, length=None, max_polar=1.2):
+    """Strands growing outward from roots on the top of a sphere of `radius` centred at the
+    origin (Blender axes), as a Y-up file holds them: (x, y, z) -> (x, z, -y)."""
+    rng = np.random.default_rng(3)
+    polar = np.arccos(rng.uniform(np.cos(max_polar), 1.0, strands_num))
+    azimuth = rng.uniform(0.0, 2.0 * np.pi, strands_num)
+    normals = np.c_[np.sin(polar) * np.cos(azimuth), np.sin(polar) * np.sin(azimuth),
+                    np.cos(polar)]
+    t = np.linspace(0.0, length or 2.0 * radius, points)[None, :, None]
+    blender = normals[:, None, :] * (radius + t)
+    return np.ascontiguousarray(blender[..., [0, 2, 1]] * [1.0, 1.0, -1.0]).astype(np.float32)
+
+
+def head_and_shoulders(center, radius):
+    """One mesh: a UV sphere head of `radius` at `center` on a box of shoulders 4 heads wide
+    below it (the fit must find the head, not the body's width)."""
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=radius, location=center, segments=64,
+                                         ring_count=32)
+    head = bpy.context.active_object
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=(center[0], center[1],
+                                                         center[2] - 2.2 * radius))
+    body = bpy.context.active_object
+    body.scale = (4.0 * radius, 1.5 * radius, 2.0 * radius)
+    for obj in (head, body):
+        obj.select_set(True)
+    bpy.context.view_layer.objects.active = head
+    bpy.ops.object.join()
+    head.name = "Body"
+    return head
+
+
+@pytest.mark.parametrize("file_radius", [9.0, 0.09, 1800.0])
+def test_fit_to_object_puts_the_roots_on_the_head_whatever_the_units(tmp_path, empty_scene,
+                                                                      file_radius):
+    """Issue 11 row 11: a groom in unknown units (centimetres, metres, TressFX's hundreds of
+    units) lands on a 10 cm head standing at (1, 2, 1.5) on shoulders: the scale the file
+    needs and the roots on the scalp."""
+    center, radius = (1.0, 2.0, 1.5), 0.1
+    body = head_and_shoulders(center, radius)
+    write_tfx4(tmp_path / "groom.tfx", cap_groom(file_radius))
+    assert bpy.ops.hairdyn.import_tfx(filepath=str(tmp_path / "groom.tfx"),
+                                      fit_to=body.name) == {'FINISHED'}
+    hair = bpy.context.view_layer.objects.active
+    assert hair.type == 'CURVES'
+    assert hair["hairdyn_import_scale"] == pytest.approx(radius / file_radius, rel=0.03)
+    groom = bridge.read_curves(hair, bpy.context.evaluated_depsgraph_get())
+    roots = groom.positions_wo[groom.curve_offsets[:-1]]
+    gap = np.abs(np.linalg.norm(roots - center, axis=1) - radius)
+    found = hair["hairdyn_import_scale"] * file_radius / radius
+    print(f"scale {found:.4f} of the true one, root gap median {np.median(gap) * 1e3:.3f} mm, "
+          f"max {gap.max() * 1e3:.3f} mm")
+    assert np.median(gap) < 1e-3 and gap.max() < 3e-3
+
+
+def test_fit_to_object_refuses_what_is_not_a_mesh(tmp_path, empty_scene):
+    write_tfx4(tmp_path / "groom.tfx", cap_groom(9.0))
+    bpy.ops.object.empty_add()
+    with pytest.raises(RuntimeError, match="is not a mesh object"):
+        bpy.ops.hairdyn.import_tfx(filepath=str(tmp_path / "groom.tfx"),
+                                   fit_to=bpy.context.active_object.name)
+    assert not [o for o in bpy.data.objects if o.type == 'CURVES']
+
+
+def test_sintel_hair_fits_on_sintel_bust_from_other_units(empty_scene):
+    """The real groom, imported as if in other units (× 0.37), fitted to the real bust: it
+    comes back to where it sits at scale 1 (the file's units are the bust's)."""
+    if not SINTEL.is_dir():
+        pytest.skip(f"needs the Sintel assets in {SINTEL}")
+    if hasattr(bpy.ops.wm, "obj_import"):
+        bpy.ops.wm.obj_import(filepath=str(SINTEL / "sintel_bust.obj"))
+    else:
+        bpy.ops.import_scene.obj(filepath=str(SINTEL / "sintel_bust.obj"))
+    bust = next(o for o in bpy.context.scene.objects if o.type == 'MESH')
+    assert bpy.ops.hairdyn.import_tfx(filepath=str(SINTEL / "sintel_hair.tfx"), scale=0.37,
+                                      fit_to=bust.name) == {'FINISHED'}
+    hair = bpy.context.view_layer.objects.active
+    print(f"Sintel fitted at scale {hair['hairdyn_import_scale']:.4f}")
+    assert hair["hairdyn_import_scale"] == pytest.approx(1.0, rel=0.05)

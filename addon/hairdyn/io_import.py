@@ -9,6 +9,9 @@ from .hair_formats import HairFile, read_cem_hair, read_tfx
 
 # Point attribute that marks the vertices a file pins (TressFX w == 0; the roots otherwise).
 FIXED_ATTRIBUTE = "hairdyn_fixed"
+# Object property: the scale from file units to metres the groom was imported at (the fitted
+# one with Fit to Object).
+IMPORT_SCALE_PROPERTY = "hairdyn_import_scale"
 
 
 def to_blender_axes(positions, up_axis):
@@ -52,9 +55,85 @@ def drop_degenerate_strands(hair, positions):
     return kept, np.ascontiguousarray(positions[points]), int(degenerate.sum())
 
 
-def create_hair_object(context, name, hair, up_axis='Y', scale=1.0, warnings=None):
+def _width(points):
+    """The larger of the x and y extents (the groom is upright after to_blender_axes)."""
+    extent = points.max(axis=0) - points.min(axis=0)
+    return float(max(extent[0], extent[1]))
+
+
+def fit_to_surface(roots, vertices, nearest, samples=500):
+    """(s, t, gap): the uniform scale and the offset that put the roots (N, 3, Z up) on a
+    surface whose vertices are `vertices` (V, 3) and whose closest point to p is nearest(p),
+    and the roots' median distance from it after the fit.
+
+    The scalp is the top of the head: the roots' width is matched to the width of the
+    surface's top band as tall as the scaled roots (a fixed point, iterated from a small scale
+    so a body below the head does not count), the roots' top and centre placed on the band's;
+    then iterative closest points refine scale and offset. No rotation: choose the Up Axis."""
+    roots = np.asarray(roots, np.float64)
+    vertices = np.asarray(vertices, np.float64)
+    width_r = _width(roots)
+    height_r = max(float(np.ptp(roots[:, 2])), 0.25 * width_r)
+    top = vertices[:, 2].max()
+    if width_r <= 0.0 or _width(vertices) <= 0.0:
+        raise HairdynError("Cannot fit: the roots or the mesh have no width")
+    s = 1e-3 * float(np.ptp(vertices[:, 2]) or _width(vertices)) / height_r
+    for _ in range(100):
+        band = vertices[vertices[:, 2] >= top - s * height_r]
+        new_s = _width(band) / width_r if len(band) >= 3 else 2.0 * s
+        if abs(new_s - s) <= 1e-4 * s:
+            break
+        s = new_s
+    band = vertices[vertices[:, 2] >= top - s * height_r]
+    center = 0.5 * (band.min(axis=0) + band.max(axis=0))
+    roots_center = 0.5 * (roots.min(axis=0) + roots.max(axis=0))
+    t = np.array([center[0] - s * roots_center[0], center[1] - s * roots_center[1],
+                  top - s * roots[:, 2].max()])
+    # Iterative closest points with scale, kept within a factor 2 of the band's estimate.
+    chosen = np.random.default_rng(0).permutation(len(roots))[:samples]
+    r = roots[chosen]
+    r_mean = r.mean(axis=0)
+    spread = float(((r - r_mean) ** 2).sum())
+    s_band = s
+    for _ in range(50):
+        q = np.array([nearest(p) for p in s * r + t])
+        q_mean = q.mean(axis=0)
+        if spread > 0.0:
+            s = float(np.clip(((r - r_mean) * (q - q_mean)).sum() / spread,
+                              0.5 * s_band, 2.0 * s_band))
+        new_t = q_mean - s * r_mean
+        moved = np.linalg.norm(new_t - t)
+        t = new_t
+        if moved <= 1e-6 * s * width_r:
+            break
+    placed = s * r + t
+    gap = float(np.median([np.linalg.norm(nearest(p) - p) for p in placed]))
+    return s, t, gap
+
+
+def fit_to_object(positions, roots_index, obj, depsgraph):
+    """fit_to_surface for a mesh object (its evaluated surface in world space)."""
+    from mathutils import Vector
+    from mathutils.bvhtree import BVHTree
+
+    from . import bridge
+
+    mesh = bridge.read_mesh(obj, depsgraph)
+    vertices = mesh.vertices_wo()
+    tree = BVHTree.FromPolygons([Vector(v) for v in vertices], mesh.triangles.tolist())
+
+    def nearest(p):
+        location = tree.find_nearest(Vector(p))[0]
+        return p if location is None else np.array(location)
+
+    return fit_to_surface(positions[roots_index], vertices, nearest)
+
+
+def create_hair_object(context, name, hair, up_axis='Y', scale=1.0, warnings=None,
+                       fit_to=None):
     """A new Curves object holding a HairFile, linked to the active collection. Strands too
-    short to simulate are left out; `warnings` (a list) receives what the artist should know."""
+    short to simulate are left out; `warnings` (a list) receives what the artist should know.
+    With `fit_to` (a mesh object) the groom is scaled and placed so its roots lie on it."""
     from . import bridge
 
     positions = to_blender_axes(hair.positions, up_axis) * np.float32(scale)
@@ -63,6 +142,15 @@ def create_hair_object(context, name, hair, up_axis='Y', scale=1.0, warnings=Non
     if dropped:
         notes.append(f"{dropped} strands with a zero-length segment (shorter than a millionth "
                      "of the groom's size) were left out")
+    if fit_to is not None:
+        s, t, gap = fit_to_object(positions, hair.curve_offsets[:-1], fit_to,
+                                  context.evaluated_depsgraph_get())
+        positions = (positions * s + t).astype(np.float32)
+        scale *= s
+        width = _width(positions[hair.curve_offsets[:-1]])
+        if gap > 0.02 * width:
+            notes.append(f"After fitting to '{fit_to.name}' the roots lie {gap:.3g} m from its "
+                         "surface (median): check the Up Axis, or fit to the head alone")
     size_note = size_warning(positions)
     if size_note:
         notes.append(size_note)
@@ -74,6 +162,7 @@ def create_hair_object(context, name, hair, up_axis='Y', scale=1.0, warnings=Non
         radius = curves.attributes.new("radius", 'FLOAT', 'POINT')
         radius.data.foreach_set("value", hair.thickness * np.float32(0.5 * scale))
     obj = bpy.data.objects.new(name, curves)
+    obj[IMPORT_SCALE_PROPERTY] = scale
     context.collection.objects.link(obj)
     return obj
 
@@ -88,7 +177,20 @@ class _ImportHair(ImportHelper):
         description="Which axis points up in the file")
     scale: FloatProperty(
         name="Scale", default=1.0, min=1e-6, max=1e6, soft_min=0.001, soft_max=1000.0,
-        description="Multiplies every coordinate (file units to Blender meters)")
+        description="Multiplies every coordinate (file units to Blender meters); with Fit to "
+                    "Object the fit finds the scale")
+    fit_to: StringProperty(
+        name="Fit to Object",
+        description="A head or body mesh: scale and place the groom so its roots lie on the "
+                    "top of its surface (the file's units do not matter). Empty: keep the "
+                    "file's size and place")
+
+    def draw(self, _context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "up_axis")
+        layout.prop(self, "scale")
+        layout.prop_search(self, "fit_to", bpy.data, "objects")
 
     def execute(self, context):
         from pathlib import Path
@@ -99,11 +201,18 @@ class _ImportHair(ImportHelper):
         except (HairdynError, OSError) as error:
             self.report({'ERROR'}, str(error))
             return {'CANCELLED'}
+        fit_to = None
+        if self.fit_to:
+            fit_to = bpy.data.objects.get(self.fit_to)
+            if fit_to is None or fit_to.type != 'MESH':
+                self.report({'ERROR'}, f"Fit to Object: '{self.fit_to}' is not a mesh object")
+                return {'CANCELLED'}
         for other in context.selected_objects:
             other.select_set(False)
         warnings = []
         try:
-            obj = create_hair_object(context, path.stem, hair, self.up_axis, self.scale, warnings)
+            obj = create_hair_object(context, path.stem, hair, self.up_axis, self.scale, warnings,
+                                     fit_to)
         except HairdynError as error:
             self.report({'ERROR'}, str(error))
             return {'CANCELLED'}
@@ -112,7 +221,8 @@ class _ImportHair(ImportHelper):
         for warning in warnings:
             self.report({'WARNING'}, warning)
         self.report({'INFO'}, f"Imported {len(obj.data.curves)} strands, "
-                              f"{len(obj.data.points)} points from '{path.name}'")
+                              f"{len(obj.data.points)} points from '{path.name}' at scale "
+                              f"{obj[IMPORT_SCALE_PROPERTY]:.4g}")
         return {'FINISHED'}
 
 
