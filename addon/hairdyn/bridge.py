@@ -14,6 +14,9 @@ from .errors import HairdynError
 
 # Attribute Blender's hair tools store the root's surface UV in (Curves, curve domain).
 SURFACE_UV_ATTRIBUTE = "surface_uv_coordinate"
+# Point attribute (BOOLEAN) of pinned points, kinematic like the roots: TressFX's immovable
+# vertices (io_import writes it), or painted by the artist.
+FIXED_ATTRIBUTE = "hairdyn_fixed"
 
 
 @dataclass
@@ -25,6 +28,16 @@ class Groom:
     surface: object  # bpy.types.Object the roots sit on, or None
     root_uvs: object  # (C, 2) float32 surface UVs of the roots, or None
     warnings: list = field(default_factory=list)  # sentences for the report / console
+    # (N,) bool pinned points (FIXED_ATTRIBUTE; the roots are pinned anyway), or None: only
+    # the roots (legacy particle hair, or Curves without the attribute)
+    fixed: object = None
+
+    @property
+    def pins_num(self):
+        """Pinned points other than the roots."""
+        if self.fixed is None:
+            return 0
+        return int(self.fixed.sum() - self.fixed[self.curve_offsets[:-1]].sum())
 
     @property
     def curves_num(self):
@@ -127,7 +140,21 @@ def read_curves(obj, depsgraph):
         curve_offsets=curve_offsets,
         surface=obj.data.surface,
         root_uvs=root_uvs,
+        fixed=read_fixed(obj, len(positions)),
     )
+
+
+def read_fixed(obj, points_num):
+    """(N,) bool from the BOOLEAN point attribute FIXED_ATTRIBUTE of a Curves object, or None
+    when it has none (or one of another kind, or for other points than the evaluated ones: a
+    modifier that adds or removes points leaves the pins without their points)."""
+    attribute = obj.data.attributes.get(FIXED_ATTRIBUTE)
+    if (attribute is None or attribute.domain != 'POINT' or attribute.data_type != 'BOOLEAN'
+            or len(attribute.data) != points_num):
+        return None
+    fixed = np.zeros(points_num, dtype=bool)
+    attribute.data.foreach_get("value", fixed)
+    return fixed if fixed.any() else None
 
 
 def read_particle_hair(obj, depsgraph):
@@ -240,6 +267,7 @@ def drop_degenerate_strands(groom, name):
         surface=groom.surface,
         root_uvs=None if groom.root_uvs is None else np.ascontiguousarray(groom.root_uvs[~degenerate]),
         warnings=groom.warnings + [message],
+        fixed=None if groom.fixed is None else np.ascontiguousarray(groom.fixed[points]),
     )
 
 

@@ -4,11 +4,12 @@ import numpy as np
 from bpy.props import EnumProperty, FloatProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
+# FIXED_ATTRIBUTE marks the vertices a file pins (TressFX w == 0; the roots otherwise); every
+# simulating method holds them with the head (bridge.read_fixed).
+from .bridge import FIXED_ATTRIBUTE
 from .errors import HairdynError
 from .hair_formats import HairFile, read_cem_hair, read_tfx
 
-# Point attribute that marks the vertices a file pins (TressFX w == 0; the roots otherwise).
-FIXED_ATTRIBUTE = "hairdyn_fixed"
 # Object property: the scale from file units to metres the groom was imported at (the fitted
 # one with Fit to Object).
 IMPORT_SCALE_PROPERTY = "hairdyn_import_scale"

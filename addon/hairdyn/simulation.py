@@ -307,6 +307,7 @@ class Runner:
             "penetration_share": self.deeper_num / self.checked_num if self.checked_num else 0.0,
             "roots_inside": self.roots_inside,
             "groom_warnings": list(simulation.groom.warnings),
+            "pinned_points": simulation.groom.pins_num,
             "penetration_tolerance": simulation.colliders.tolerance_wo()
             if simulation.colliders
             else None,

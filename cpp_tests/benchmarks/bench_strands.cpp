@@ -70,3 +70,42 @@ BENCHMARK(BM_StrandStep)
     ->Args({10000, 2, 1})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
+
+/* The cost of pinned points (groom/pins.hh) on 300 strands × 16 segments, one thread: no pins,
+ * or every strand's tip pinned (AMD's ponytail pins both ends of its back strands). */
+static void BM_StrandStepPinned(benchmark::State &state)
+{
+  const int64_t strands_num = 300;
+  const int segments_num = 16;
+  set_thread_num(1);
+  std::vector<int32_t> offsets;
+  std::vector<vec3> positions;
+  make_groom(strands_num, segments_num, offsets, positions);
+  StrandParams params;
+  params.model = StrandModel(state.range(0));
+  StrandSolver solver(offsets, positions, mat4(1.0f), {}, params);
+  if (state.range(1)) {
+    std::vector<uint8_t> pinned(positions.size(), 0);
+    for (size_t c = 1; c < offsets.size(); c++) {
+      pinned[size_t(offsets[c] - 1)] = 1;
+    }
+    solver.set_pinned(pinned);
+  }
+  int frame = 0;
+  for (auto _ : state) {
+    const float t = float(frame++) / 24.0f;
+    const mat4 head = glm::rotate(glm::translate(mat4(1.0f), vec3(0.05f * std::sin(3.0f * t), 0, 0)),
+                                  0.5f * std::sin(2.0f * t), vec3(0, 0, 1));
+    solver.step(1.0f / 24.0f, head);
+    benchmark::DoNotOptimize(solver.positions().data());
+  }
+  state.SetItemsProcessed(state.iterations() * strands_num * segments_num * params.substeps);
+  set_thread_num(0);
+}
+BENCHMARK(BM_StrandStepPinned)
+    ->ArgNames({"kurihara", "pinned"})
+    ->Args({0, 0})
+    ->Args({0, 1})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMillisecond);

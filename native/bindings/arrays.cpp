@@ -102,6 +102,13 @@ Span<int32_t> as_int(const py::handle obj, const char *name)
   return Span<int32_t>(static_cast<const int32_t *>(array.data()), array.shape(0));
 }
 
+Span<uint8_t> as_bool(const py::handle obj, const char *name)
+{
+  const py::array array = check_array(obj, name, py::dtype::of<bool>(), "bool", 0);
+  static_assert(sizeof(bool) == sizeof(uint8_t));
+  return Span<uint8_t>(static_cast<const uint8_t *>(array.data()), array.shape(0));
+}
+
 Span<mat3> as_frames(const py::handle obj, const char *name)
 {
   const py::array array = check_rows(obj, name, py::dtype::of<float>(), "float32", {3, 3});

@@ -30,6 +30,8 @@ Span<vec3> as_float3_unchecked(py::handle obj, const char *name);
 Span<ivec3> as_int3(py::handle obj, const char *name);
 /* (N,) int32. */
 Span<int32_t> as_int(py::handle obj, const char *name);
+/* (N,) bool, as 0 / 1 bytes. */
+Span<uint8_t> as_bool(py::handle obj, const char *name);
 /* (N,) float32, all finite. */
 Span<float> as_float(py::handle obj, const char *name);
 /* (N, 3, 3) float32, all finite: N frames whose rows [i, 0], [i, 1], [i, 2] are the tangent,

@@ -82,6 +82,11 @@ py::dict particles_dict(LcpParticles &&particles)
   result["u"] = u;
   result["v"] = v;
   result["s"] = s;
+  if (!particles.fixed.empty()) {
+    py::array_t<bool> fixed(n);
+    std::copy_n(particles.fixed.data(), n, reinterpret_cast<uint8_t *>(fixed.mutable_data()));
+    result["fixed"] = fixed;
+  }
   return result;
 }
 
@@ -168,16 +173,24 @@ void bind_lcp(py::module_ &m)
   m.def(
       "lcp_particles_from_groom",
       [](const LcpParams &params, const py::handle curve_offsets, const py::handle positions,
-         const py::handle root_uv) {
+         const py::handle root_uv, const py::handle pinned) {
         check_lcp_params(params);
         const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
         const Span<vec3> points = as_float3(positions, "positions");
         check_groom(offsets, points);
         const Span<vec2> uv = as_float2_or_empty(root_uv, "root_uv", offsets.size() - 1);
+        Span<uint8_t> pins;
+        if (!pinned.is_none()) {
+          pins = as_bool(pinned, "pinned");
+          if (pins.size() != points.size()) {
+            fail("pinned must have one value per point (" + std::to_string(points.size()) +
+                 "), not " + std::to_string(pins.size()));
+          }
+        }
         LcpParticles particles;
         {
           py::gil_scoped_release release;
-          particles = sample_groom_particles(offsets, points, uv, params);
+          particles = sample_groom_particles(offsets, points, uv, params, pins);
         }
         if (particles.size() == 0) {
           fail("No particles: the strands are shorter than the particle spacing.");
@@ -185,14 +198,16 @@ void bind_lcp(py::module_ &m)
         return particles_dict(std::move(particles));
       },
       py::arg("params"), py::arg("curve_offsets"), py::arg("positions"),
-      py::arg("root_uv") = py::none(),
-      "Particles sampled along an existing groom (u, v from the roots, s from arc length).");
+      py::arg("root_uv") = py::none(), py::arg("pinned") = py::none(),
+      "Particles sampled along an existing groom (u, v from the roots, s from arc length). "
+      "pinned (N,) bool, the groom's pinned points: the dict then has 'fixed' (M,) bool, the "
+      "particles whose nearest groom point along their strand is pinned.");
 
   py::class_<LcpSolver>(m, "LcpSolver", "Loosely connected particles (Bando 2003).")
       .def(py::init([](const LcpParams &params, const py::handle positions_wo,
                        const py::handle directions_wo, const py::handle u, const py::handle v,
                        const py::handle s, const py::handle head_to_world_rest,
-                       const WindParams &wind) {
+                       const WindParams &wind, const py::handle fixed) {
              check_lcp_params(params);
              LcpParticles particles;
              const Span<vec3> x = as_float3(positions_wo, "positions");
@@ -217,13 +232,22 @@ void bind_lcp(py::module_ &m)
              particles.u.assign(su.begin(), su.end());
              particles.v.assign(sv.begin(), sv.end());
              particles.s.assign(ss.begin(), ss.end());
+             if (!fixed.is_none()) {
+               const Span<uint8_t> mask = as_bool(fixed, "fixed");
+               if (mask.size() != x.size()) {
+                 fail("fixed must have one value per particle (" + std::to_string(x.size()) +
+                      "), not " + std::to_string(mask.size()));
+               }
+               particles.fixed.assign(mask.begin(), mask.end());
+             }
              py::gil_scoped_release release;
              return new LcpSolver(params, particles, head, wind);
            }),
            py::arg("params"), py::arg("positions"), py::arg("directions"), py::arg("u"),
            py::arg("v"), py::arg("s"), py::arg("head_to_world_rest"),
-           py::arg("wind") = WindParams(),
-           "wind: the shared WindParams, the free stream of the SPH air particles (§3.5).")
+           py::arg("wind") = WindParams(), py::arg("fixed") = py::none(),
+           "wind: the shared WindParams, the free stream of the SPH air particles (§3.5); "
+           "fixed: None or (N,) bool, particles held by the head like the roots (s < 0).")
       .def("set_wind", &LcpSolver::set_wind, py::arg("wind"),
            "Change the wind (WindParams); the air particles start over in it.")
       .def_property_readonly("wind", &LcpSolver::wind)
@@ -294,6 +318,16 @@ void bind_lcp(py::module_ &m)
       .def_property_readonly("u", [](py::object self) { return float_view(self.cast<LcpSolver &>().u(), self); })
       .def_property_readonly("v", [](py::object self) { return float_view(self.cast<LcpSolver &>().v(), self); })
       .def_property_readonly("s", [](py::object self) { return float_view(self.cast<LcpSolver &>().s(), self); })
+      .def_property_readonly(
+          "is_fixed",
+          [](const LcpSolver &self) {
+            const Span<uint8_t> fixed = self.is_fixed();
+            py::array_t<bool> result(fixed.size());
+            std::copy_n(fixed.data(), fixed.size(),
+                        reinterpret_cast<uint8_t *>(result.mutable_data()));
+            return result;
+          },
+          "(N,) bool: particles held by the head, the roots (s < 0) and the pinned ones.")
       .def_property_readonly("air_positions", [](py::object self) {
         return float3_view(self.cast<LcpSolver &>().air_positions(), self);
       })
@@ -371,6 +405,23 @@ void bind_lcp(py::module_ &m)
           py::arg("particles_wo"), py::arg("head_matrix"), py::arg("colliders") = py::none(),
           "Strand positions (N, 3) float32 for the particles' current world positions; "
           "colliders (a ColliderSet, or None) keeps the points out of the body.")
+      .def(
+          "set_pinned",
+          [](ParticleSkin &self, const py::handle pinned) {
+            if (pinned.is_none()) {
+              self.set_pinned({});
+              return;
+            }
+            const Span<uint8_t> mask = as_bool(pinned, "pinned");
+            if (mask.size() != self.points_num()) {
+              fail("pinned must have one value per groom point (" +
+                   std::to_string(self.points_num()) + "), not " + std::to_string(mask.size()));
+            }
+            self.set_pinned(mask);
+          },
+          py::arg("pinned"),
+          "Carry the groom points where pinned (N,) bool is True rigidly with the head, like "
+          "the roots (the Curves attribute hairdyn_fixed); None: only the roots.")
       .def_property_readonly("points_num", &ParticleSkin::points_num)
       .def_property_readonly("particles_num", &ParticleSkin::particles_num);
 }

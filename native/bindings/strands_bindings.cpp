@@ -198,6 +198,29 @@ void bind_strands(py::module_ &m)
           "Run substep_pass after every substep, after the passes added before (kept alive by "
           "the solver).")
       .def("clear_passes", &StrandSolver::clear_passes, "Remove every pass.")
+      .def(
+          "set_pinned",
+          [](StrandSolver &self, const py::handle pinned) {
+            if (pinned.is_none()) {
+              py::gil_scoped_release release;
+              self.set_pinned({});
+              return;
+            }
+            const Span<uint8_t> mask = as_bool(pinned, "pinned");
+            if (mask.size() != self.positions().size()) {
+              fail("pinned must have one value per point (" +
+                   std::to_string(self.positions().size()) + "), not " +
+                   std::to_string(mask.size()));
+            }
+            py::gil_scoped_release release;
+            self.set_pinned(mask);
+          },
+          py::arg("pinned"),
+          "Hold the points where pinned (N,) bool is True on their rest positions carried by "
+          "the head, like the roots (TressFX's immovable vertices; the Curves attribute "
+          "hairdyn_fixed); None pins only the roots.")
+      .def_property_readonly(
+          "pins_num", &StrandSolver::pins_num, "Points pinned after the roots (set_pinned).")
       .def("pass_ms", &StrandSolver::pass_ms, py::arg("name"),
            "Milliseconds the pass of that name took during the last step (0 if none has it).")
       .def_property_readonly(

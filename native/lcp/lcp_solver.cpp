@@ -51,12 +51,15 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
   x_rest_head_.resize(size_t(n));
   t_rest_head_.resize(size_t(n));
   is_root_.resize(size_t(n));
+  is_fixed_.resize(size_t(n));
   for (int64_t i = 0; i < n; i++) {
     x_rest_head_[size_t(i)] = to_head * (particles_wo.positions[size_t(i)] - head_rest_.translation);
     t_rest_head_[size_t(i)] = glm::normalize(to_head * particles_wo.directions[size_t(i)]);
     is_root_[size_t(i)] = s_[size_t(i)] < 0.0f ? 1 : 0;
+    is_fixed_[size_t(i)] = is_root_[size_t(i)] ||
+                           (!particles_wo.fixed.empty() && particles_wo.fixed[size_t(i)]);
   }
-  separate_close_particles(x_rest_head_, is_root_, rest_min_distance(), 20, [](vec3 &) {});
+  separate_close_particles(x_rest_head_, is_fixed_, rest_min_distance(), 20, [](vec3 &) {});
 
   /* Particle mass: the hair density ρ_h divided by the mean SPH number density of the rest
    * state (eq. 1 with unit masses), so that eq. 1 gives ρ_h on average at rest. */
@@ -75,7 +78,7 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
   /* Bando 2003, eq. 9: A_i = (m_i / δ)^(2/3). */
   cross_sections_.assign(size_t(n), cross_section(mass_, params_.material_density));
 
-  connections_ = build_connections(x_rest_head_, t_rest_head_, is_root_, params_.h1, params_.a0,
+  connections_ = build_connections(x_rest_head_, t_rest_head_, is_fixed_, params_.h1, params_.a0,
                                    params_.neighbor_num);
   build_tethers();
   k_.resize(size_t(connections_.size()));
@@ -130,14 +133,14 @@ void LcpSolver::set_body_contact(ContactQuery query)
   };
   parallel_for(int64_t(x_rest_head_.size()), 1024, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      if (!is_root_[size_t(i)]) {
+      if (!is_fixed_[size_t(i)]) {
         out_of_body(x_rest_head_[size_t(i)]);
       }
     }
   });
   /* The particles put back on the surface land on each other: space them out again. */
-  separate_close_particles(x_rest_head_, is_root_, rest_min_distance(), 20, out_of_body);
-  connections_ = build_connections(x_rest_head_, t_rest_head_, is_root_, params_.h1, params_.a0,
+  separate_close_particles(x_rest_head_, is_fixed_, rest_min_distance(), 20, out_of_body);
+  connections_ = build_connections(x_rest_head_, t_rest_head_, is_fixed_, params_.h1, params_.a0,
                                    params_.neighbor_num);
   build_tethers();
   k_.resize(size_t(connections_.size()));
@@ -167,7 +170,7 @@ void LcpSolver::build_tethers()
    * hair reaches the particle over s_i − s_r, or the straight distance if that is longer. */
   parallel_for(n, 256, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      if (is_root_[size_t(i)]) {
+      if (is_fixed_[size_t(i)]) {
         anchor_[size_t(i)] = int32_t(i);
         continue;
       }
@@ -197,7 +200,7 @@ void LcpSolver::enforce_tethers()
   }
   parallel_for(int64_t(x_head_.size()), 1024, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      if (is_root_[size_t(i)]) {
+      if (is_fixed_[size_t(i)]) {
         continue;
       }
       const vec3 d = x_head_[size_t(i)] - x_head_[size_t(anchor_[size_t(i)])];
@@ -320,7 +323,7 @@ LcpSolver::SubstepEstimate LcpSolver::estimate_substeps(const float frame_dt) co
     estimate.reason = text;
   }
   if (!params_.implicit_springs) {
-    const float dt_springs = spring_time_step(connections_, alpha_k_, is_root_, mass_);
+    const float dt_springs = spring_time_step(connections_, alpha_k_, is_fixed_, mass_);
     if (substeps_for(frame_dt, dt_springs) > estimate.count) {
       estimate.count = substeps_for(frame_dt, dt_springs);
       std::snprintf(text, sizeof(text),
@@ -396,7 +399,7 @@ bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
                                 params_.young_modulus, k_, alpha_k_, side_sums_);
     float dt = std::min(dt_max, frame_dt - elapsed);
     if (!params_.implicit_springs) {
-      dt = std::min(dt, spring_time_step(connections_, alpha_k_, is_root_, mass_));
+      dt = std::min(dt, spring_time_step(connections_, alpha_k_, is_fixed_, mass_));
     }
     substep(dt, head_at((elapsed + 0.5f * dt) / frame_dt), head_at((elapsed + dt) / frame_dt));
     elapsed += dt;
@@ -457,8 +460,8 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   const vec3 &w = mid.omega_head;
   parallel_for(n, 1024, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      if (is_root_[size_t(i)]) {
-        continue; /* Root particles are fixed to the head (§3.2). */
+      if (is_fixed_[size_t(i)]) {
+        continue; /* Root particles are fixed to the head (§3.2), and so are pinned ones. */
       }
       const vec3 &x = x_head_[size_t(i)];
       vec3 &v = v_head_[size_t(i)];
@@ -482,7 +485,7 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   if (params_.implicit_springs) {
     spring_iterations_ += implicit_springs_
                               .step(connections_, x_head_, alpha_k_, params_.spring_damping,
-                                    masses_, is_root_, dt, v_head_)
+                                    masses_, is_fixed_, dt, v_head_)
                               .iterations;
   }
   parallel_for(n, 4096, [&](const IndexRange range) {
@@ -497,7 +500,7 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
     collide_with_body(end);
   }
   /* 5. Hair directions, eq. 15. */
-  update_directions(connections_, x_head_, alpha_k_, is_root_, t_head_);
+  update_directions(connections_, x_head_, alpha_k_, is_fixed_, t_head_);
 }
 
 void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
@@ -562,7 +565,7 @@ void LcpSolver::collide_with_body(const HeadState &end)
   const mat3 to_head = glm::transpose(end.rotation);
   parallel_for(int64_t(x_head_.size()), 1024, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      if (is_root_[size_t(i)]) {
+      if (is_fixed_[size_t(i)]) {
         continue;
       }
       vec3 &x = x_head_[size_t(i)];
@@ -603,7 +606,7 @@ void LcpSolver::count_interpenetrations()
 {
   grid_.build(x_head_, 2.0f * params_.h2);
   find_neighbors(grid_, x_head_, 2.0f * params_.h2, true, neighbors_);
-  interpenetrating_pairs_num_ = count_close_pairs(x_head_, is_root_, neighbors_,
+  interpenetrating_pairs_num_ = count_close_pairs(x_head_, is_fixed_, neighbors_,
                                                   0.5f * params_.h2);
 }
 

@@ -52,7 +52,10 @@ namespace hairdyn {
 class LcpSolver {
  public:
   /* `particles_wo`: positions and directions in world space with the head at
-   * `head_to_world_rest`; s < 0 marks root particles, fixed to the head. */
+   * `head_to_world_rest`; s < 0 marks root particles, fixed to the head, and
+   * particles_wo.fixed (when given) other particles held by the head like them: they stand for
+   * hair the groom pins (groom/pins.hh). They stay on their rest positions in the head's
+   * frame, keep their springs to free neighbours and their direction, and anchor no tether. */
   LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
             const mat4 &head_to_world_rest, const WindParams &wind = WindParams());
 
@@ -104,6 +107,8 @@ class LcpSolver {
   Span<float> v() const { return v_; }
   Span<float> s() const { return s_; }
   Span<uint8_t> is_root() const { return is_root_; }
+  /* Particles held by the head: the roots and those particles_wo.fixed marks. */
+  Span<uint8_t> is_fixed() const { return is_fixed_; }
   float particle_mass() const { return mass_; }
 
   /* Air particles of the wind (world space). */
@@ -157,6 +162,7 @@ class LcpSolver {
   std::vector<vec3> x_rest_head_, t_rest_head_;
   std::vector<float> u_, v_, s_;
   std::vector<uint8_t> is_root_;
+  std::vector<uint8_t> is_fixed_; /* is_root_, or held by the head (a pin's particle) */
   float mass_ = 0.0f;
   std::vector<float> masses_, cross_sections_;
   LcpConnections connections_;

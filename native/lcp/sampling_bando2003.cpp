@@ -266,7 +266,8 @@ LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &leng
 }
 
 LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Span<vec3> positions,
-                                    const Span<vec2> root_uv, const LcpParams &params)
+                                    const Span<vec2> root_uv, const LcpParams &params,
+                                    const Span<uint8_t> pinned)
 {
   assert(find_groom_error(curve_offsets, positions).empty());
   const int64_t curves_num = curve_offsets.size() - 1;
@@ -296,6 +297,7 @@ LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Spa
     int32_t curve;
     float s;
     vec3 position, direction;
+    uint8_t fixed = 0;
   };
   const float step = params.particle_spacing * 0.25f;
   std::vector<Candidate> candidates;
@@ -304,7 +306,7 @@ LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Spa
     const vec3 root = positions[points.start];
     const vec3 root_dir = glm::normalize(positions[points.start + 1] - root);
     for (float s = -params.root_depth; s < 0.0f; s += step) {
-      candidates.push_back({int32_t(c), s, root + s * root_dir, root_dir});
+      candidates.push_back({int32_t(c), s, root + s * root_dir, root_dir, 0});
     }
     float arc = 0.0f, next = 0.0f;
     for (int64_t k = points.start; k + 1 < points.one_after_last(); k++) {
@@ -312,7 +314,9 @@ LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Spa
       const float len = glm::length(seg);
       while (next <= arc + len) {
         const float f = (next - arc) / len;
-        candidates.push_back({int32_t(c), next, positions[k] + f * seg, seg / len});
+        const int64_t nearest = f <= 0.5f ? k : k + 1;
+        const uint8_t fixed = !pinned.is_empty() && nearest != points.start && pinned[nearest];
+        candidates.push_back({int32_t(c), next, positions[k] + f * seg, seg / len, fixed});
         next += step;
       }
       arc += len;
@@ -357,6 +361,9 @@ LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Spa
     particles.u.push_back(strand_uv[size_t(cand.curve)].x);
     particles.v.push_back(strand_uv[size_t(cand.curve)].y);
     particles.s.push_back(cand.s);
+    if (!pinned.is_empty()) {
+      particles.fixed.push_back(cand.fixed);
+    }
   }
   return particles;
 }

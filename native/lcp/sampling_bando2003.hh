@@ -19,6 +19,9 @@ struct LcpParticles {
   std::vector<vec3> positions;
   std::vector<vec3> directions; /* Unit hair direction t. */
   std::vector<float> u, v, s;
+  /* Empty, or one per particle: 1 for a particle held by the head like a root (it stands for
+   * hair the groom pins, groom/pins.hh). */
+  std::vector<uint8_t> fixed;
 
   int64_t size() const { return int64_t(positions.size()); }
 };
@@ -64,8 +67,12 @@ int64_t separate_close_particles(MutableSpan<vec3> positions, Span<uint8_t> is_f
 
 /* Particles along an existing groom (curves): (u, v) from the strand's root (root_uv, two
  * floats per strand, or empty: the roots' bounding box projected on its two widest axes),
- * s from arc length, t from the tangents; roots continue s_r beneath the first point. */
+ * s from arc length, t from the tangents; roots continue s_r beneath the first point.
+ * `pinned` (one per groom point, or empty): a particle stands for the hair around it, so it is
+ * fixed (LcpParticles::fixed) where the groom point nearest to it along its strand is pinned
+ * (a strand's first point is its root: the root particles stand for it already). */
 LcpParticles sample_groom_particles(Span<int32_t> curve_offsets, Span<vec3> positions,
-                                    Span<vec2> root_uv, const LcpParams &params);
+                                    Span<vec2> root_uv, const LcpParams &params,
+                                    Span<uint8_t> pinned = {});
 
 }  // namespace hairdyn

@@ -7,6 +7,7 @@
 #include "core/parallel.hh"
 #include "core/spatial_grid.hh"
 #include "groom/groom.hh"
+#include "groom/pins.hh"
 
 namespace hairdyn {
 
@@ -170,6 +171,18 @@ ParticleSkin::ParticleSkin(const Span<int32_t> curve_offsets, const Span<vec3> p
   }
 }
 
+void ParticleSkin::set_pinned(const Span<uint8_t> pinned)
+{
+  assert(pinned.is_empty() || pinned.size() == points_num());
+  pinned_.assign(pinned.begin(), pinned.end());
+  for (size_t c = 0; c + 1 < curve_offsets_.size() && !pinned_.empty(); c++) {
+    pinned_[size_t(curve_offsets_[c])] = 0; /* the root is held anyway */
+  }
+  if (std::none_of(pinned_.begin(), pinned_.end(), [](const uint8_t p) { return p != 0; })) {
+    pinned_.clear();
+  }
+}
+
 void ParticleSkin::apply(const Span<vec3> particles_wo, const mat4 &head_to_world,
                          const ColliderSet *colliders, const MutableSpan<vec3> r_points_wo)
 {
@@ -184,10 +197,13 @@ void ParticleSkin::apply(const Span<vec3> particles_wo, const mat4 &head_to_worl
   const int k = neighbours_num_;
   const int64_t curves_num = int64_t(curve_offsets_.size()) - 1;
   parallel_for(curves_num, 64, [&](const IndexRange range) {
+    std::vector<glm::dvec3> strand; /* a strand's points while pins move them */
     for (int64_t c = range.start; c < range.one_after_last(); c++) {
       const IndexRange points = curve_points(curve_offsets_, c);
       glm::dvec3 previous = glm::dvec3(to_world * glm::dvec4(rest_head_[size_t(points.start)], 1.0));
       r_points_wo[points.start] = vec3(previous);
+      strand.assign(size_t(points.size), previous);
+      int64_t held = points.start; /* the root, then the last pin */
       for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
         /* Carried by its particles' displacements, in the head's space. */
         glm::dvec3 target = rest_head_[size_t(i)];
@@ -209,8 +225,25 @@ void ParticleSkin::apply(const Span<vec3> particles_wo, const mat4 &head_to_worl
           }
           point = toward(glm::dvec3(contact.surface_point_wo + 1e-4f * contact.normal_wo));
         }
-        r_points_wo[i] = vec3(point);
+        strand[size_t(i - points.start)] = point;
+        if (!pinned_.empty() && pinned_[size_t(i)]) {
+          /* Carried by the head; the points since the last held one reach it. */
+          const int64_t n = i - held + 1;
+          double length = 0.0;
+          for (int64_t m = held + 1; m <= i; m++) {
+            length += rest_lengths_[size_t(m)];
+          }
+          reach_pin(MutableSpan<glm::dvec3>(strand).slice(held - points.start, n),
+                    Span<double>(rest_lengths_).slice(held, n),
+                    glm::dvec3(to_world * glm::dvec4(rest_head_[size_t(i)], 1.0)),
+                    1e-9 * length);
+          held = i;
+          point = strand[size_t(i - points.start)];
+        }
         previous = point;
+      }
+      for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+        r_points_wo[i] = vec3(strand[size_t(i - points.start)]);
       }
     }
   });

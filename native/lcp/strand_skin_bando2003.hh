@@ -9,7 +9,9 @@
  * particles' motion, and the head's own motion is carried exactly. Roots follow the head
  * rigidly; then, root to tip, each point is put at its rest distance from the previous one
  * toward where it was carried, or toward the body's surface (up to twice) when that is inside
- * a collider, so strands never stretch nor go through the body.
+ * a collider, so strands never stretch nor go through the body. Pinned points (set_pinned,
+ * groom/pins.hh) are carried rigidly by the head like the roots: the chain before each one
+ * reaches it with its lengths kept, and the points after it go on from it.
  *
  * Nearest neighbours come from the spatial grid (core/spatial_grid.hh): exact k nearest, the
  * search radius doubled for the points whose k nearest are not yet certain. */
@@ -34,6 +36,9 @@ class ParticleSkin {
    * `colliders` (or nullptr) keeps the points out of the body. */
   void apply(Span<vec3> particles_wo, const mat4 &head_to_world, const ColliderSet *colliders,
              MutableSpan<vec3> r_points_wo);
+  /* Per groom point, non-zero where it is pinned (roots are whatever the mask says); empty:
+   * only the roots. */
+  void set_pinned(Span<uint8_t> pinned);
 
   int64_t points_num() const { return int64_t(rest_head_.size()); }
   int64_t particles_num() const { return int64_t(particles_rest_head_.size()); }
@@ -50,6 +55,7 @@ class ParticleSkin {
   std::vector<int32_t> neighbours_;
   std::vector<double> weights_;
   std::vector<glm::dvec3> moved_; /* apply()'s particle displacements (head's space). */
+  std::vector<uint8_t> pinned_;   /* per point after the roots, or empty */
 };
 
 /* The k nearest of `points` (with a fourth coordinate `points_w`) to each query (with

@@ -8,6 +8,7 @@
 #include "core/parallel.hh"
 #include "groom/frames.hh"
 #include "groom/groom.hh"
+#include "groom/pins.hh"
 #include "strands/deflection.hh"
 
 namespace hairdyn {
@@ -73,6 +74,7 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
   hinge_stiffness_.assign(points, 0.0f);
   positions_wo_.resize(points);
   velocities_wo_.resize(points);
+  pinned_.assign(points, 0);
 
   compute_root_frames(curve_offsets_, rest_positions_wo_, root_normals_wo, root_frames_wo_);
   const mat3 world_to_head_rotation = glm::transpose(rest_pose_.rotation_matrix());
@@ -133,6 +135,34 @@ void StrandSolver::clear_passes()
 {
   passes_.clear();
   pass_ms_.clear();
+}
+
+void StrandSolver::set_pinned(const Span<uint8_t> pinned)
+{
+  assert(pinned.is_empty() || pinned.size() == int64_t(rest_positions_wo_.size()));
+  const int64_t curves = curves_num();
+  std::fill(pinned_.begin(), pinned_.end(), 0);
+  pins_.clear();
+  pins_rest_head_.clear();
+  pin_offsets_.assign(size_t(curves + 1), 0);
+  for (int64_t curve = 0; curve < curves && !pinned.is_empty(); curve++) {
+    const IndexRange points = curve_points(curve_offsets_, curve);
+    for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+      if (pinned[i]) {
+        pinned_[size_t(i)] = 1;
+        pins_.push_back(i);
+        pins_rest_head_.push_back(
+            rest_pose_.inverse_transform_point(rest_positions_wo_[size_t(i)]));
+      }
+    }
+    pin_offsets_[size_t(curve + 1)] = int64_t(pins_.size());
+  }
+  if (pins_.empty()) {
+    pin_offsets_.clear();
+  }
+  /* A strand with pins takes them back after every substep, with or without passes. */
+  positions_before_.resize(rest_positions_wo_.size());
+  velocities_before_.resize(rest_positions_wo_.size());
 }
 
 double StrandSolver::pass_ms(const std::string &name) const
@@ -275,6 +305,37 @@ bool StrandSolver::advance_strand(const int64_t curve, const Substep &substep, C
   return finite;
 }
 
+void StrandSolver::pin_strand(const int64_t curve, const Substep &substep)
+{
+  /* The nodes a pin moves, before it moved them (per thread: strands run in parallel). */
+  thread_local std::vector<vec3> unpinned;
+  int64_t held = curve_points(curve_offsets_, curve).start; /* the root, then each pin */
+  /* Roots are kinematic whatever a pass did (as take_back_strand has them). */
+  positions_wo_[size_t(held)] = substep.pose.transform_point(root_positions_head_[size_t(curve)]);
+  for (int64_t k = pin_offsets_[size_t(curve)]; k < pin_offsets_[size_t(curve + 1)]; k++) {
+    const int64_t pin = pins_[size_t(k)];
+    const int64_t n = pin - held + 1;
+    const vec3 target = substep.pose.transform_point(pins_rest_head_[size_t(k)]);
+    const MutableSpan<vec3> chain = MutableSpan<vec3>(positions_wo_).slice(held, n);
+    const Span<float> lengths = Span<float>(rest_lengths_).slice(held, n);
+    float length = 0.0f;
+    for (int64_t i = 1; i < n; i++) {
+      length += lengths[i];
+    }
+    unpinned.assign(chain.begin(), chain.end());
+    reach_pin(chain, lengths, target, pin_tolerance_relative * length);
+    /* The chain's nodes move as a position-based constraint moves them: the correction is
+     * velocity (Müller et al. 2007, "Position based dynamics", §3.1, v = (x_new − x) / h),
+     * so no velocity keeps pulling them off the pin. The pin moves with the head. */
+    for (int64_t i = 1; i + 1 < n; i++) {
+      velocities_wo_[size_t(held + i)] += (chain[i] - unpinned[size_t(i)]) / substep.h;
+    }
+    velocities_wo_[size_t(pin)] = substep.head_velocity.of_point(target -
+                                                                  substep.pose.translation);
+    held = pin;
+  }
+}
+
 void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
 {
   /* What the passes changed (positions_before_, velocities_before_ hold the nodes as the
@@ -384,9 +445,23 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
      * result as substep by substep, with its data hot in cache). */
     for_each_curve([&](const int64_t curve, Counts &chunk) {
       prepare_strand(curve, substeps[0].h);
+      const IndexRange points = curve_points(curve_offsets_, curve);
       for (const Substep &substep : substeps) {
         if (!advance_strand(curve, substep, chunk)) {
           break;
+        }
+        if (has_pins(curve)) {
+          std::copy_n(&positions_wo_[size_t(points.start)], points.size,
+                      &positions_before_[size_t(points.start)]);
+          std::copy_n(&velocities_wo_[size_t(points.start)], points.size,
+                      &velocities_before_[size_t(points.start)]);
+          pin_strand(curve, substep);
+          take_back_strand(curve, substep);
+          if (!strand_is_sane(curve)) {
+            chunk.diverged++;
+            place_at_rest(curve, substep.pose);
+            break;
+          }
         }
       }
     });
@@ -418,6 +493,9 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
       }
       for_each_curve([&](const int64_t curve, Counts &chunk) {
         if (!diverged[size_t(curve)]) {
+          if (has_pins(curve)) {
+            pin_strand(curve, substep);
+          }
           take_back_strand(curve, substep);
           if (!strand_is_sane(curve)) {
             chunk.diverged++;

@@ -10,6 +10,12 @@
  * positions and velocities (substep_pass.hh), then the solver takes the corrected nodes back
  * into its angles and rates root to tip (lengths kept, roots kinematic).
  *
+ * Pinned points (groom/pins.hh, set_pinned) are kinematic too: after the passes of every
+ * substep each pin goes to its rest position carried by the head, the chain between it and the
+ * root (or the pin before) reaches it with lengths kept, the points between take the move as
+ * velocity, the pin takes the head's velocity there, and the same take-back turns it all into
+ * angles and rates; the points beyond a pin swing after it.
+ *
  * Coordinates. Segment i's frame F_i has z along the segment. At rest, F_0 is the root frame
  * (root normal + a deterministic tangent) and F_i is F_{i-1} transported without twist onto
  * segment i; the fixed rotation R_i = F_{i-1}ᵀ F_i at rest encodes the groom's rest shape
@@ -117,6 +123,14 @@ class StrandSolver {
   /* Passes run in order after every substep (substep_pass.hh). The passes are the caller's
    * and must stay alive while the solver steps. */
   void add_pass(SubstepPass *pass);
+  /* Marks points kinematic like the roots (TressFX's immovable vertices): per point, non-zero
+   * for pinned; roots are pinned whatever the mask says; an empty span pins only the roots.
+   * Each pin is held on its rest position carried by the head from the next substep on. */
+  void set_pinned(Span<uint8_t> pinned);
+  /* Per point, 1 where set_pinned pinned a point after a root (0 everywhere before any). */
+  Span<uint8_t> pinned() const { return pinned_; }
+  /* Points pinned after the roots. */
+  int64_t pins_num() const { return int64_t(pins_.size()); }
   void clear_passes();
   Span<SubstepPass *> passes() const { return passes_; }
   /* Milliseconds the pass named `name` took during the last step (all substeps); 0 for a
@@ -132,6 +146,9 @@ class StrandSolver {
    * by the head, so no NaN ever leaves the solver; the caller should fail the frame. */
   int64_t diverged_num() const { return diverged_num_; }
   static constexpr float runaway_speed = 1000.0f; /* m/s: no hair moves this fast. */
+  /* A pin is reached to this share of the length of strand before it (3 µm on a 0.3 m
+   * strand, far under what shows), within pin_iterations Newton steps (groom/pins.hh). */
+  static constexpr float pin_tolerance_relative = 1e-5f;
   /* rad: the most an articulated segment may turn (or turn against its parent) in one step
    * of its explicit velocity products; a faster strand takes up to max_turn_steps shorter
    * steps in a substep. */
@@ -201,6 +218,14 @@ class StrandSolver {
    * equal steps that keep every turn within the bound (at most max_turn_steps). */
   bool articulated_step(IndexRange points, const Substep &substep, const mat3 &root_frame,
                         const vec3 &wind_wo, Counts &counts, int *r_steps);
+  /* Each pin of the strand to its rest position carried by the head at the end of the
+   * substep, the chain before it reaching it (groom/pins.hh), positions and velocities only:
+   * take_back_strand turns them into angles and rates. */
+  void pin_strand(int64_t curve, const Substep &substep);
+  bool has_pins(int64_t curve) const
+  {
+    return !pin_offsets_.empty() && pin_offsets_[size_t(curve + 1)] > pin_offsets_[size_t(curve)];
+  }
   /* Positions and velocities after passes back into angles and rates, root to tip. */
   void take_back_strand(int64_t curve, const Substep &substep);
 
@@ -248,6 +273,14 @@ class StrandSolver {
   int64_t contacts_num_ = 0;
   int64_t projections_num_ = 0;
   int64_t diverged_num_ = 0;
+
+  /* Pinned points after the roots: the mask per point, the pins strand by strand (pins_ from
+   * pin_offsets_[c] to pin_offsets_[c + 1], root to tip) and each pin's rest position in the
+   * head's frame. */
+  std::vector<uint8_t> pinned_;
+  std::vector<int64_t> pin_offsets_;
+  std::vector<int64_t> pins_;
+  std::vector<vec3> pins_rest_head_;
 
   std::vector<SubstepPass *> passes_;
   std::vector<vec3> positions_before_; /* the nodes before the passes of a substep */

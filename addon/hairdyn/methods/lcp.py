@@ -335,6 +335,8 @@ class Lcp(Method):
         if self.collider_set is not None:  # moves rest particles out of the body: skin after
             self.solver.set_colliders(self.collider_set)
         self.skin = build.native.ParticleSkin(build.groom, self.solver, build.head_matrix)
+        if build.groom.pins_num:  # pinned strand points ride on the head, not the particles
+            self.skin.set_pinned(build.groom.fixed)
         self.strand_positions = self.skin.apply(
             self.solver.positions, build.head_matrix, self.collider_set
         )
@@ -346,8 +348,15 @@ class Lcp(Method):
         init, groom, native = build.settings.lcp_init, build.groom, build.native
         params = build.params("lcp")
         if init.particles_from == 'GROOM':
+            # A particle whose nearest groom point is pinned is held by the head like the
+            # roots; particles sampled over the scalp stand for no groom point: the skin
+            # holds the pinned points.
             particles = native.lcp_particles_from_groom(
-                params, groom.curve_offsets, groom.positions_wo, groom.root_uvs
+                params,
+                groom.curve_offsets,
+                groom.positions_wo,
+                groom.root_uvs,
+                groom.fixed if groom.pins_num else None,
             )
         else:
             scalp_vertices, scalp_triangles, scalp_head_vertices = scalp_patch(
@@ -368,6 +377,7 @@ class Lcp(Method):
             particles["s"],
             build.head_matrix,
             wind=build.params("wind"),
+            fixed=particles.get("fixed"),
         )
 
     def step(self, frame_dt, head_matrix):

@@ -7,8 +7,10 @@ output keeps the groom's topology; the point attribute `lod_level` says which le
 
 The LodSolver runs no substep passes, so the volume's smoothing and targeting and the swept
 spheres are refused with it (strands.NoPasses); shell normals, child hairs and the collision maps
-work. With "Measure Error" a plain StrandSolver runs the same frames alongside (twice the
-work) and the report gives the mean distance between the two, as a share of the hair length.
+work. Pinned points (the `hairdyn_fixed` attribute) are refused too: the skeletons it simulates
+are not the artist's strands, so nothing would hold a pinned point on the head. With "Measure
+Error" a plain StrandSolver runs the same frames alongside (twice the work) and the report gives
+the mean distance between the two, as a share of the hair length.
 """
 
 import time
@@ -213,6 +215,13 @@ class LodStrands(Attached):
 def make_solver(build, params, root_normals):
     if not build.settings.lod.enabled:
         return None
+    pins = build.groom.pins_num
+    if pins:
+        raise HairdynError(
+            f"{NAME} cannot hold pinned points: {pins} points of the hair are pinned "
+            "(the 'hairdyn_fixed' attribute) and it simulates strips and clusters, not the "
+            "strands that carry them. Turn Level of Detail off, or remove the attribute"
+        )
     return LodStrands(build, params, root_normals)
 
 
@@ -227,6 +236,7 @@ def _draw(layout, settings):
         text="Not with volume smoothing, targeting or swept spheres (no substep passes)",
         icon='INFO',
     )
+    layout.label(text="Not with pinned points (hairdyn_fixed)", icon='INFO')
 
 
 EXTENSION = Extension(

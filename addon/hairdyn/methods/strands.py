@@ -164,7 +164,7 @@ class Strands(Method):
                 if solver is not None:
                     return solver
         groom = build.groom
-        return build.native.StrandSolver(
+        solver = build.native.StrandSolver(
             groom.curve_offsets,
             groom.positions_wo,
             build.head_matrix,
@@ -172,6 +172,9 @@ class Strands(Method):
             params,
             build.params("wind"),
         )
+        if groom.pins_num:  # pinned points (hairdyn_fixed) are held by the head like roots
+            solver.set_pinned(groom.fixed)
+        return solver
 
     def _make_children(self, build, params, head_mesh):
         """Kurihara 1993 §4: child hairs clustered around the guides, or spread over the
