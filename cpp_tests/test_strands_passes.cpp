@@ -10,39 +10,24 @@
 #include "collision_test_shapes.hh"
 #include "groom/groom.hh"
 #include "groom/metrics.hh"
+#include "strand_scenes.hh"
 #include "strands/strand_solver.hh"
 
 using namespace hairdyn;
 
 namespace {
 
-struct Groom {
-  std::vector<int32_t> offsets{0};
-  std::vector<vec3> positions;
-};
+using strand_scenes::Groom;
 
-/* Wavy strands hanging from the top of a 0.1 m sphere. */
+/* 12 segments of 2 cm; a sway (yaw at 4 rad/s, sliding at 5 rad/s). */
 Groom wavy_groom(const int strands_num)
 {
-  Groom groom;
-  for (int s = 0; s < strands_num; s++) {
-    const float angle = 6.2831853f * float(s) / float(strands_num);
-    const vec3 out(std::cos(angle), std::sin(angle), 0.0f);
-    vec3 p = vec3(0.0f, 0.0f, 0.101f) + 0.03f * out;
-    for (int i = 0; i <= 12; i++) {
-      groom.positions.push_back(p);
-      p += 0.02f * glm::normalize(out + vec3(0.0f, 0.3f * std::sin(float(i)), -0.5f));
-    }
-    groom.offsets.push_back(int32_t(groom.positions.size()));
-  }
-  return groom;
+  return strand_scenes::wavy_groom(strands_num, 12, 0.02f);
 }
 
 mat4 swaying_head(const int frame)
 {
-  const float t = float(frame) / 24.0f;
-  return glm::rotate(glm::translate(mat4(1.0f), vec3(0.05f * std::sin(5.0f * t), 0.0f, 0.0f)),
-                     0.6f * std::sin(4.0f * t), vec3(0.0f, 0.0f, 1.0f));
+  return strand_scenes::swaying_head(frame, 4.0f, 5.0f);
 }
 
 class CountingPass : public SubstepPass {

@@ -8,40 +8,24 @@
 #include "groom/groom.hh"
 #include "groom/metrics.hh"
 #include "groom/pins.hh"
+#include "strand_scenes.hh"
 #include "strands/strand_solver.hh"
 
 using namespace hairdyn;
 
 namespace {
 
-struct Groom {
-  std::vector<int32_t> offsets{ 0 };
-  std::vector<vec3> positions;
-};
+using strand_scenes::Groom;
 
-/* Wavy strands of 16 segments hanging from the top of a 0.1 m head. */
+/* 16 segments of 1.5 cm; a hard shake (yaw at 8 rad/s, sliding at 10 rad/s). */
 Groom wavy_groom(const int strands_num)
 {
-  Groom groom;
-  for (int s = 0; s < strands_num; s++) {
-    const float angle = 6.2831853f * float(s) / float(strands_num);
-    const vec3 out(std::cos(angle), std::sin(angle), 0.0f);
-    vec3 p = vec3(0.0f, 0.0f, 0.101f) + 0.03f * out;
-    for (int i = 0; i <= 16; i++) {
-      groom.positions.push_back(p);
-      p += 0.015f * glm::normalize(out + vec3(0.0f, 0.3f * std::sin(float(i)), -0.5f));
-    }
-    groom.offsets.push_back(int32_t(groom.positions.size()));
-  }
-  return groom;
+  return strand_scenes::wavy_groom(strands_num, 16, 0.015f);
 }
 
-/* A hard shake: ±0.6 rad about the vertical at 8 rad/s, and ±5 cm sideways. */
 mat4 shaking_head(const int frame)
 {
-  const float t = float(frame) / 24.0f;
-  return glm::rotate(glm::translate(mat4(1.0f), vec3(0.05f * std::sin(10.0f * t), 0.0f, 0.0f)),
-                     0.6f * std::sin(8.0f * t), vec3(0.0f, 0.0f, 1.0f));
+  return strand_scenes::swaying_head(frame, 8.0f, 10.0f);
 }
 
 /* Pins the points `index_in_strand` (negative: from the tip) of every strand. */
