@@ -7,6 +7,8 @@
 #include <mutex>
 #include <thread>
 
+#include <unistd.h>
+
 namespace hairdyn {
 
 namespace {
@@ -15,7 +17,8 @@ namespace {
  * OpenMP's threads spin after a loop; inside Blender, whose own threads share the cores, the
  * spinning slowed a frame 5× in Blender 3.4, which loads libgomp itself (so the add-on could
  * not ask it to sleep with OMP_WAIT_POLICY). A loop hands out its chunks from an atomic
- * counter; the caller works too. */
+ * counter; the caller works too. A process forked from one that ran loops (Python's
+ * multiprocessing) runs its loops alone. */
 class ThreadPool {
  public:
   ~ThreadPool() { resize(0); }
@@ -46,6 +49,7 @@ class ThreadPool {
     }
     workers_.clear();
     stop_ = false;
+    owner_ = getpid();
     for (int i = 1; i < thread_num; i++) {
       workers_.emplace_back([this, seen = generation_]() { work(seen); });
     }
@@ -60,7 +64,8 @@ class ThreadPool {
         chunk_fn(chunk);
       }
     };
-    if (in_loop_ || workers_.empty()) {
+    /* A forked child has none of the workers (fork copies only the calling thread). */
+    if (in_loop_ || workers_.empty() || getpid() != owner_) {
       alone();
       return;
     }
@@ -129,6 +134,7 @@ class ThreadPool {
   }
 
   std::vector<std::thread> workers_;
+  pid_t owner_ = 0; /* the process the workers run in */
   std::mutex run_mutex_; /* one loop at a time */
   std::mutex mutex_;     /* guards what follows but next_ */
   std::condition_variable wake_, done_;
