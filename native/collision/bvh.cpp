@@ -124,75 +124,78 @@ bool intersect_ray_triangle(const vec3 &origin, const vec3 &direction, const vec
   return true;
 }
 
-TriangleBVH::TriangleBVH(const Span<vec3> vertices, const Span<ivec3> triangles,
-                         const int leaf_size)
-{
-  const int32_t tris_num = int32_t(triangles.size());
-  if (tris_num == 0) {
-    return;
-  }
-  triangle_ids_.resize(size_t(tris_num));
-  std::vector<vec3> centroids(static_cast<size_t>(tris_num));
-  for (int32_t t = 0; t < tris_num; t++) {
-    triangle_ids_[size_t(t)] = t;
-    const ivec3 tri = triangles[t];
-    centroids[size_t(t)] = (vertices[tri.x] + vertices[tri.y] + vertices[tri.z]) / 3.0f;
-  }
-  corners_.resize(size_t(tris_num) * 3);
-  /* Temporarily keep the triangles' corners in original order for bounds during the build. */
-  for (int32_t t = 0; t < tris_num; t++) {
-    const ivec3 tri = triangles[t];
-    corners_[size_t(t) * 3 + 0] = vertices[tri.x];
-    corners_[size_t(t) * 3 + 1] = vertices[tri.y];
-    corners_[size_t(t) * 3 + 2] = vertices[tri.z];
-  }
-  nodes_.reserve(size_t(2 * tris_num / std::max(leaf_size, 1) + 1));
-  build_node(0, tris_num, centroids, std::max(leaf_size, 1));
-  /* Reorder the corners into leaf order. */
-  std::vector<vec3> ordered(corners_.size());
-  for (int32_t i = 0; i < tris_num; i++) {
-    const size_t src = size_t(triangle_ids_[size_t(i)]) * 3;
-    for (size_t k = 0; k < 3; k++) {
-      ordered[size_t(i) * 3 + k] = corners_[src + k];
-    }
-  }
-  corners_ = std::move(ordered);
-}
+namespace {
 
-int32_t TriangleBVH::build_node(const int32_t begin, const int32_t end,
-                                std::vector<vec3> &centroids, const int leaf_size)
+void split_node(const int32_t begin, const int32_t end, const std::vector<vec3> &centroids,
+                const int leaf_size, std::vector<int32_t> &order, std::vector<SplitNode> &nodes)
 {
-  const int32_t index = int32_t(nodes_.size());
-  nodes_.push_back({});
-  vec3 min(float_max), max(-float_max), cmin(float_max), cmax(-float_max);
+  const size_t index = nodes.size();
+  nodes.push_back({begin, end, 0});
+  vec3 cmin(float_max), cmax(-float_max);
   for (int32_t i = begin; i < end; i++) {
-    const int32_t t = triangle_ids_[size_t(i)];
-    for (size_t k = 0; k < 3; k++) {
-      min = glm::min(min, corners_[size_t(t) * 3 + k]);
-      max = glm::max(max, corners_[size_t(t) * 3 + k]);
-    }
-    cmin = glm::min(cmin, centroids[size_t(t)]);
-    cmax = glm::max(cmax, centroids[size_t(t)]);
+    cmin = glm::min(cmin, centroids[size_t(order[size_t(i)])]);
+    cmax = glm::max(cmax, centroids[size_t(order[size_t(i)])]);
   }
-  nodes_[size_t(index)].min = min;
-  nodes_[size_t(index)].max = max;
   const vec3 extent = cmax - cmin;
   if (end - begin <= leaf_size || std::max(extent.x, std::max(extent.y, extent.z)) <= 0.0f) {
-    nodes_[size_t(index)].first_or_right = begin;
-    nodes_[size_t(index)].count = end - begin;
-    return index;
+    return;
   }
   const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
   const int32_t mid = begin + (end - begin) / 2;
-  std::nth_element(triangle_ids_.begin() + begin, triangle_ids_.begin() + mid,
-                   triangle_ids_.begin() + end, [&](const int32_t a, const int32_t b) {
-                     return centroids[size_t(a)][axis] < centroids[size_t(b)][axis];
+  std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
+                   [&](const int32_t a, const int32_t b) {
+                     return centroids[size_t(a)][axis] < centroids[size_t(b)][axis] ||
+                            (centroids[size_t(a)][axis] == centroids[size_t(b)][axis] && a < b);
                    });
-  build_node(begin, mid, centroids, leaf_size);
-  const int32_t right = build_node(mid, end, centroids, leaf_size);
-  nodes_[size_t(index)].first_or_right = right;
-  nodes_[size_t(index)].count = 0;
-  return index;
+  split_node(begin, mid, centroids, leaf_size, order, nodes);
+  nodes[index].right = int32_t(nodes.size());
+  split_node(mid, end, centroids, leaf_size, order, nodes);
+}
+
+}  // namespace
+
+std::vector<SplitNode> median_split_tree(const Span<vec3> vertices, const Span<ivec3> triangles,
+                                         const int leaf_size, std::vector<int32_t> &r_order)
+{
+  const int32_t tris_num = int32_t(triangles.size());
+  r_order.resize(size_t(tris_num));
+  std::vector<SplitNode> nodes;
+  if (tris_num == 0) {
+    return nodes;
+  }
+  std::vector<vec3> centroids(static_cast<size_t>(tris_num));
+  for (int32_t t = 0; t < tris_num; t++) {
+    r_order[size_t(t)] = t;
+    const ivec3 tri = triangles[t];
+    centroids[size_t(t)] = (vertices[tri.x] + vertices[tri.y] + vertices[tri.z]) / 3.0f;
+  }
+  nodes.reserve(size_t(2 * tris_num / std::max(leaf_size, 1) + 1));
+  split_node(0, tris_num, centroids, std::max(leaf_size, 1), r_order, nodes);
+  return nodes;
+}
+
+TriangleBVH::TriangleBVH(const Span<vec3> vertices, const Span<ivec3> triangles,
+                         const int leaf_size)
+{
+  const std::vector<SplitNode> split =
+      median_split_tree(vertices, triangles, leaf_size, triangle_ids_);
+  corners_.resize(triangle_ids_.size() * 3);
+  for (size_t i = 0; i < triangle_ids_.size(); i++) {
+    const ivec3 tri = triangles[triangle_ids_[i]];
+    corners_[i * 3 + 0] = vertices[tri.x];
+    corners_[i * 3 + 1] = vertices[tri.y];
+    corners_[i * 3 + 2] = vertices[tri.z];
+  }
+  nodes_.reserve(split.size());
+  for (const SplitNode &node : split) {
+    vec3 min(float_max), max(-float_max);
+    for (size_t k = size_t(node.begin) * 3; k < size_t(node.end) * 3; k++) {
+      min = glm::min(min, corners_[k]);
+      max = glm::max(max, corners_[k]);
+    }
+    nodes_.push_back({min, max, node.is_leaf() ? node.begin : node.right,
+                      node.is_leaf() ? node.end - node.begin : 0});
+  }
 }
 
 void TriangleBVH::ray_hits(const vec3 &origin, const vec3 &direction, const float t_max,

@@ -8,9 +8,8 @@
  * query (a uniform grid does poorly on closest points far from the surface). The simulation's
  * per-step queries never touch it: they use the maps, whose cost does not depend on the mesh.
  *
- * Binary tree over axis-aligned boxes, split at the median centroid of the longest axis, at
- * most `leaf_size` triangles per leaf. Nodes are stored depth-first in one array; the
- * triangles are copied in leaf order, so a leaf is a contiguous range. */
+ * Binary tree over axis-aligned boxes (median_split_tree), nodes stored depth-first in one
+ * array; the triangles are copied in leaf order, so a leaf is a contiguous range. */
 #include <vector>
 
 #include "collision/mesh.hh"
@@ -47,6 +46,22 @@ ClosestPoint closest_point_on_triangle(const vec3 &p, const vec3 &a, const vec3 
 bool intersect_ray_triangle(const vec3 &origin, const vec3 &direction, const vec3 &a,
                             const vec3 &b, const vec3 &c, RayHit &r_hit);
 
+/* One node of the tree both triangle hierarchies share (TriangleBVH here, SsvBVH of the
+ * swept-sphere pass): it covers the triangles order[begin, end) of median_split_tree. */
+struct SplitNode {
+  int32_t begin = 0, end = 0;
+  /* Inner node: its right child's index (the left child is the next node); leaf: 0. */
+  int32_t right = 0;
+  bool is_leaf() const { return right == 0; }
+};
+
+/* Binary tree over the triangles, nodes stored depth-first: each node is split at the median
+ * centroid along its centroids' longest axis (ties by triangle index, so the tree does not
+ * depend on the sort), at most `leaf_size` triangles per leaf. r_order receives the triangle
+ * indices in leaf order. Indices must be valid (see find_mesh_error). */
+std::vector<SplitNode> median_split_tree(Span<vec3> vertices, Span<ivec3> triangles,
+                                         int leaf_size, std::vector<int32_t> &r_order);
+
 class TriangleBVH {
  public:
   TriangleBVH() = default;
@@ -78,8 +93,6 @@ class TriangleBVH {
     int32_t first_or_right = 0;
     int32_t count = 0;
   };
-  int32_t build_node(int32_t begin, int32_t end, std::vector<vec3> &centroids, int leaf_size);
-
   std::vector<Node> nodes_;
   /* Triangle corners in leaf order, and the original index of each. */
   std::vector<vec3> corners_;

@@ -11,75 +11,44 @@ namespace hairdyn {
 
 SsvBVH::SsvBVH(const Span<vec3> vertices, const Span<ivec3> triangles, const int leaf_size)
 {
-  const int32_t tris_num = int32_t(triangles.size());
-  if (tris_num == 0) {
-    return;
-  }
-  corners_.resize(size_t(tris_num) * 3);
-  normals_.resize(size_t(tris_num));
-  leaf_triangles_.resize(size_t(tris_num));
-  std::vector<vec3> centroids(static_cast<size_t>(tris_num));
-  for (int32_t t = 0; t < tris_num; t++) {
-    const ivec3 tri = triangles[t];
-    vec3 *c = &corners_[size_t(t) * 3];
+  const std::vector<SplitNode> split =
+      median_split_tree(vertices, triangles, leaf_size, leaf_triangles_);
+  const size_t tris_num = size_t(triangles.size());
+  corners_.resize(tris_num * 3);
+  normals_.resize(tris_num);
+  for (size_t t = 0; t < tris_num; t++) {
+    const ivec3 tri = triangles[int64_t(t)];
+    vec3 *c = &corners_[t * 3];
     c[0] = vertices[tri.x];
     c[1] = vertices[tri.y];
     c[2] = vertices[tri.z];
     const vec3 n = glm::cross(c[1] - c[0], c[2] - c[0]);
     const float len = glm::length(n);
-    normals_[size_t(t)] = len > 0.0f ? n / len : vec3(0.0f);
-    centroids[size_t(t)] = (c[0] + c[1] + c[2]) / 3.0f;
-    leaf_triangles_[size_t(t)] = t;
+    normals_[t] = len > 0.0f ? n / len : vec3(0.0f);
   }
-  nodes_.reserve(size_t(2 * tris_num / std::max(leaf_size, 1) + 1));
-  build_node(0, tris_num, centroids, std::max(leaf_size, 1));
-}
-
-int32_t SsvBVH::build_node(const int32_t begin, const int32_t end,
-                           const std::vector<vec3> &centroids, const int leaf_size)
-{
-  const int32_t index = int32_t(nodes_.size());
-  nodes_.push_back({});
-  constexpr float big = std::numeric_limits<float>::max();
-  vec3 min(big), max(-big), cmin(big), cmax(-big);
-  for (int32_t i = begin; i < end; i++) {
-    const int32_t t = leaf_triangles_[size_t(i)];
-    for (int k = 0; k < 3; k++) {
-      min = glm::min(min, corners_[size_t(t) * 3 + size_t(k)]);
-      max = glm::max(max, corners_[size_t(t) * 3 + size_t(k)]);
+  nodes_.reserve(split.size());
+  for (const SplitNode &node : split) {
+    /* The node's PSS: centred on its box, through its farthest corner. */
+    constexpr float big = std::numeric_limits<float>::max();
+    vec3 min(big), max(-big);
+    for (int32_t i = node.begin; i < node.end; i++) {
+      for (int k = 0; k < 3; k++) {
+        min = glm::min(min, corners_[size_t(leaf_triangles_[size_t(i)]) * 3 + size_t(k)]);
+        max = glm::max(max, corners_[size_t(leaf_triangles_[size_t(i)]) * 3 + size_t(k)]);
+      }
     }
-    cmin = glm::min(cmin, centroids[size_t(t)]);
-    cmax = glm::max(cmax, centroids[size_t(t)]);
-  }
-  /* The node's PSS: centred on the box, through its farthest corner. */
-  const vec3 center = 0.5f * (min + max);
-  float radius_sq = 0.0f;
-  for (int32_t i = begin; i < end; i++) {
-    const int32_t t = leaf_triangles_[size_t(i)];
-    for (int k = 0; k < 3; k++) {
-      const vec3 d = corners_[size_t(t) * 3 + size_t(k)] - center;
-      radius_sq = std::max(radius_sq, glm::dot(d, d));
+    const vec3 center = 0.5f * (min + max);
+    float radius_sq = 0.0f;
+    for (int32_t i = node.begin; i < node.end; i++) {
+      for (int k = 0; k < 3; k++) {
+        const vec3 d = corners_[size_t(leaf_triangles_[size_t(i)]) * 3 + size_t(k)] - center;
+        radius_sq = std::max(radius_sq, glm::dot(d, d));
+      }
     }
+    nodes_.push_back({{center, std::sqrt(radius_sq) * (1.0f + 1e-6f)},
+                      node.is_leaf() ? node.begin : node.right,
+                      node.is_leaf() ? node.end - node.begin : 0});
   }
-  nodes_[size_t(index)].volume = {center, std::sqrt(radius_sq) * (1.0f + 1e-6f)};
-  const vec3 extent = cmax - cmin;
-  if (end - begin <= leaf_size || std::max(extent.x, std::max(extent.y, extent.z)) <= 0.0f) {
-    nodes_[size_t(index)].first_or_right = begin;
-    nodes_[size_t(index)].count = end - begin;
-    return index;
-  }
-  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-  const int32_t mid = begin + (end - begin) / 2;
-  std::nth_element(leaf_triangles_.begin() + begin, leaf_triangles_.begin() + mid,
-                   leaf_triangles_.begin() + end, [&](const int32_t a, const int32_t b) {
-                     return centroids[size_t(a)][axis] < centroids[size_t(b)][axis] ||
-                            (centroids[size_t(a)][axis] == centroids[size_t(b)][axis] && a < b);
-                   });
-  build_node(begin, mid, centroids, leaf_size);
-  const int32_t right = build_node(mid, end, centroids, leaf_size);
-  nodes_[size_t(index)].first_or_right = right;
-  nodes_[size_t(index)].count = 0;
-  return index;
 }
 
 void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_distance,

@@ -69,8 +69,6 @@ class SsvBVH {
     int32_t first_or_right = 0;
     int32_t count = 0;
   };
-  int32_t build_node(int32_t begin, int32_t end, const std::vector<vec3> &centroids,
-                     int leaf_size);
 
   std::vector<Node> nodes_;
   std::vector<int32_t> leaf_triangles_; /* triangle ids in leaf order */
