@@ -108,14 +108,20 @@ def is_hair_object(obj):
 # Reading hair
 
 
+def _curve_offsets(curves):
+    """The curve_offsets (C + 1,) int32 of a Curves ID."""
+    curve_offsets = np.zeros(len(curves.curves) + 1, dtype=np.int32)
+    if len(curves.curves):  # an empty Curves ID stores no offsets at all, not [0]
+        curves.curve_offset_data.foreach_get("value", curve_offsets)
+    return curve_offsets
+
+
 def _curves_arrays(curves):
     """(positions (N, 3) float32 object space, curve_offsets (C + 1,) int32) of a Curves ID."""
     positions = np.empty((len(curves.points), 3), dtype=np.float32)
-    curve_offsets = np.zeros(len(curves.curves) + 1, dtype=np.int32)
-    if len(curves.curves):  # an empty Curves ID stores no offsets at all, not [0]
+    if len(curves.curves):
         curves.position_data.foreach_get("vector", positions.ravel())
-        curves.curve_offset_data.foreach_get("value", curve_offsets)
-    return positions, curve_offsets
+    return positions, _curve_offsets(curves)
 
 
 def read_curves(obj, depsgraph):
@@ -402,16 +408,18 @@ def new_curves_data(name, sizes):
 
 
 def _topology_matches(curves, curve_offsets):
-    if len(curves.curves) + 1 != len(curve_offsets):
+    if len(curves.curves) + 1 != len(curve_offsets) or len(curves.points) != curve_offsets[-1]:
         return False
-    _, offsets = _curves_arrays(curves)
-    return np.array_equal(offsets, curve_offsets)
+    return np.array_equal(_curve_offsets(curves), curve_offsets)
 
 
 def tapered_radius(sizes, root_radius):
     """Per point of curves of these point counts: root_radius at the root, tapering linearly
     to a fifth of it at the tip (a single hair; the groom's own radius is a guide's)."""
-    t = np.concatenate([np.linspace(0.0, 1.0, int(size)) for size in sizes])
+    sizes = np.asarray(sizes, dtype=np.int64)
+    starts = np.repeat(np.cumsum(sizes) - sizes, sizes)
+    steps = np.repeat(np.maximum(sizes - 1, 1), sizes)
+    t = (np.arange(int(sizes.sum())) - starts) / steps  # 0 at each root, 1 at each tip
     return (root_radius * (1.0 - 0.8 * t)).astype(np.float32)
 
 
