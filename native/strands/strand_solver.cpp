@@ -336,6 +336,20 @@ void StrandSolver::pin_strand(const int64_t curve, const Substep &substep)
   }
 }
 
+bool StrandSolver::settle_strand(const int64_t curve, const Substep &substep, Counts &counts)
+{
+  if (has_pins(curve)) {
+    pin_strand(curve, substep);
+  }
+  take_back_strand(curve, substep);
+  if (strand_is_sane(curve)) {
+    return true;
+  }
+  counts.diverged++;
+  place_at_rest(curve, substep.pose);
+  return false;
+}
+
 void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
 {
   /* What the passes changed (positions_before_, velocities_before_ hold the nodes as the
@@ -455,11 +469,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
                       &positions_before_[size_t(points.start)]);
           std::copy_n(&velocities_wo_[size_t(points.start)], points.size,
                       &velocities_before_[size_t(points.start)]);
-          pin_strand(curve, substep);
-          take_back_strand(curve, substep);
-          if (!strand_is_sane(curve)) {
-            chunk.diverged++;
-            place_at_rest(curve, substep.pose);
+          if (!settle_strand(curve, substep, chunk)) {
             break;
           }
         }
@@ -492,16 +502,8 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
                            .count();
       }
       for_each_curve([&](const int64_t curve, Counts &chunk) {
-        if (!diverged[size_t(curve)]) {
-          if (has_pins(curve)) {
-            pin_strand(curve, substep);
-          }
-          take_back_strand(curve, substep);
-          if (!strand_is_sane(curve)) {
-            chunk.diverged++;
-            diverged[size_t(curve)] = 1;
-            place_at_rest(curve, substep.pose);
-          }
+        if (!diverged[size_t(curve)] && !settle_strand(curve, substep, chunk)) {
+          diverged[size_t(curve)] = 1;
         }
       });
     }

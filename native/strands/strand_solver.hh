@@ -228,6 +228,9 @@ class StrandSolver {
   }
   /* Positions and velocities after passes back into angles and rates, root to tip. */
   void take_back_strand(int64_t curve, const Substep &substep);
+  /* After the passes of a substep: the strand's pins, the take-back, and the sanity check;
+   * false (counted, the strand put at rest) when it diverged. */
+  bool settle_strand(int64_t curve, const Substep &substep, Counts &counts);
 
   /* The force on the segment ending at point i (centre `center` moving at `center_velocity`),
    * filtered by the reaction constraint where its tip (at `tip`, moving at `tip_velocity`) is
