@@ -21,6 +21,7 @@ from bpy.props import (
 )
 
 from . import methods, native, parameters
+from .methods.base import object_poll
 
 # Groups not tied to one method: the colliders' maps and response, the wind (core/wind.hh).
 SHARED_PARAMS = {"collision": "CollisionParams", "wind": "WindParams"}
@@ -28,15 +29,11 @@ _registered = []  # the classes register() registered, in order
 _groups = {}  # settings attribute -> PropertyGroup class, as registered
 
 
-def _is_mesh(_self, obj):
-    return obj.type == 'MESH'
-
-
 class HairdynColliderItem(bpy.types.PropertyGroup):
     object: PointerProperty(
         name="Collider",
         type=bpy.types.Object,
-        poll=_is_mesh,
+        poll=object_poll('MESH'),
         description="A mesh the hair collides with",
     )
 
@@ -51,7 +48,7 @@ class HairdynSettings(bpy.types.PropertyGroup):
     head: PointerProperty(
         name="Head",
         type=bpy.types.Object,
-        poll=_is_mesh,
+        poll=object_poll('MESH'),
         description="Mesh the hair roots are attached to. Empty: the Curves object's surface, "
         "or the mesh that emits the particle hair",
     )

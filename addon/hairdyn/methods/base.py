@@ -10,6 +10,15 @@ import numpy as np
 from .. import parameters
 
 
+def object_poll(kind):
+    """A PointerProperty poll that offers only objects of this type ('MESH', 'CURVES', ...)."""
+
+    def poll(_self, obj):
+        return obj.type == kind
+
+    return poll
+
+
 class Stream:
     """A point set a method writes every frame besides the strands: its layout (points,
     columns {name: width} in order, curve offsets for curves), `read()` giving its arrays for

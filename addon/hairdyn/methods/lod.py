@@ -20,14 +20,10 @@ import numpy as np
 from bpy.props import BoolProperty, PointerProperty
 
 from ..errors import HairdynError
-from .base import Section
+from .base import Section, object_poll
 from .strands import Attached, Extension, NoPasses
 
 NAME = "Level of detail (Ward & Lin 2003)"
-
-
-def _is_camera(_self, obj):
-    return obj.type == 'CAMERA'
 
 
 class HairdynLodOptions(bpy.types.PropertyGroup):
@@ -36,7 +32,7 @@ class HairdynLodOptions(bpy.types.PropertyGroup):
     camera: PointerProperty(
         name="Camera",
         type=bpy.types.Object,
-        poll=_is_camera,
+        poll=object_poll('CAMERA'),
         description="Camera whose view, distance and frustum choose the level of detail every "
         "frame (Ward & Lin 2003 §6.1); empty: the scene's camera",
     )

@@ -9,14 +9,10 @@ import numpy as np
 from bpy.props import BoolProperty, PointerProperty
 
 from ..errors import HairdynError
-from .base import Section
+from .base import Section, object_poll
 from .strands import Attached, Extension
 
 SHELL_MATERIAL = "hairdyn_shell_normals"
-
-
-def _is_curves(_self, obj):
-    return obj.type == 'CURVES'
 
 
 class HairdynVolumeOptions(bpy.types.PropertyGroup):
@@ -31,7 +27,7 @@ class HairdynVolumeOptions(bpy.types.PropertyGroup):
     target: PointerProperty(
         name="Target",
         type=bpy.types.Object,
-        poll=_is_curves,
+        poll=object_poll('CURVES'),
         description="Curves object whose shape the hair is directed toward by the density "
         "force of Petrovic 2006 §5.2 (eq. 3); empty: no targeting",
     )
