@@ -23,15 +23,19 @@ mat4 GridFrame::grid_to_world() const
   return head_to_world * lattice;
 }
 
-HeadBox head_box(const Span<vec3> positions_wo, const mat4 &world_to_head)
+namespace {
+
+template<typename Keep>
+HeadBox head_box_keeping(const Span<vec3> positions_wo, const mat4 &world_to_head, const Keep &keep)
 {
   return parallel_reduce(
       positions_wo.size(), point_grain, HeadBox(),
       [&](const IndexRange range) {
         HeadBox box;
         for (int64_t i = range.start; i < range.one_after_last(); i++) {
+          const vec3 p = transform_point(world_to_head, positions_wo[i]);
+          keep(i, p);
           if (is_finite(positions_wo[i])) {
-            const vec3 p = transform_point(world_to_head, positions_wo[i]);
             box.lo = glm::min(box.lo, p);
             box.hi = glm::max(box.hi, p);
           }
@@ -42,6 +46,39 @@ HeadBox head_box(const Span<vec3> positions_wo, const mat4 &world_to_head)
         a.include(b);
         return a;
       });
+}
+
+template<typename HeadOf>
+void bin_by(const GridFrame &grid, const int64_t points_num, const HeadOf &head_of,
+            PointBins &r_bins)
+{
+  r_bins.vertex_of.resize(size_t(points_num));
+  r_bins.fraction.resize(size_t(points_num));
+  parallel_for(points_num, point_grain, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      ivec3 cell;
+      vec3 fraction(0.0f);
+      const bool inside = locate(grid, head_of(i) / grid.cell_size - vec3(grid.origin), cell,
+                                 fraction);
+      r_bins.vertex_of[size_t(i)] = inside ? int32_t(grid.vertex_index(cell.x, cell.y, cell.z)) :
+                                             -1;
+      r_bins.fraction[size_t(i)] = fraction;
+    }
+  });
+}
+
+}  // namespace
+
+HeadBox head_box(const Span<vec3> positions_wo, const mat4 &world_to_head)
+{
+  return head_box_keeping(positions_wo, world_to_head, [](int64_t, const vec3 &) {});
+}
+
+HeadBox head_box(const Span<vec3> positions_wo, const mat4 &world_to_head,
+                 const MutableSpan<vec3> r_positions_head)
+{
+  return head_box_keeping(positions_wo, world_to_head,
+                          [&](const int64_t i, const vec3 &p) { r_positions_head[i] = p; });
 }
 
 GridFrame grid_around(const HeadBox &box, float cell_size, const int margin,
@@ -87,20 +124,14 @@ float mean_segment_length(const Span<int32_t> curve_offsets, const Span<vec3> po
 
 void bin_points(const GridFrame &grid, const Span<vec3> positions_wo, PointBins &r_bins)
 {
-  const int64_t points_num = positions_wo.size();
-  r_bins.coords.resize(size_t(points_num));
-  r_bins.cell_of.resize(size_t(points_num));
-  parallel_for(points_num, point_grain, [&](const IndexRange range) {
-    for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      const vec3 p = grid.to_grid(positions_wo[i]);
-      ivec3 cell;
-      vec3 fraction;
-      r_bins.coords[size_t(i)] = p;
-      r_bins.cell_of[size_t(i)] = locate(grid, p, cell, fraction) ?
-                                      int32_t(grid.cell_index(cell.x, cell.y, cell.z)) :
-                                      -1;
-    }
-  });
+  bin_by(grid, positions_wo.size(), [&](const int64_t i) {
+    return transform_point(grid.world_to_head, positions_wo[i]);
+  }, r_bins);
+}
+
+void bin_head_points(const GridFrame &grid, const Span<vec3> positions_head, PointBins &r_bins)
+{
+  bin_by(grid, positions_head.size(), [&](const int64_t i) { return positions_head[i]; }, r_bins);
 }
 
 void splat_density(const GridFrame &grid, const PointBins &bins, const MutableSpan<float> r_density,
@@ -108,6 +139,44 @@ void splat_density(const GridFrame &grid, const PointBins &bins, const MutableSp
 {
   splat_to_grid<float>(grid, bins, [](int64_t) { return 1.0f; }, r_density, scratch);
 }
+
+namespace {
+
+/* One axis of blur_binomial over `planes` planes of `length` × `width` values, plane p starting
+ * at p · plane_offset, value (t, i) of a plane at t · step + i from its start; t runs along the
+ * axis. A plane is copied to the same place in `scratch` and filtered back from there, so the
+ * planes are independent and each is read while it is in cache. */
+template<typename T>
+void blur_axis(const Span<float> weights, const int64_t planes, const int64_t plane_offset,
+               const int length, const int64_t step, const int64_t width,
+               const MutableSpan<T> values, const MutableSpan<T> scratch)
+{
+  const int radius = int(weights.size() / 2);
+  const int64_t grain = std::max<int64_t>(1, blur_grain / (int64_t(length) * width));
+  parallel_for(planes, grain, [&](const IndexRange range) {
+    for (int64_t p = range.start; p < range.one_after_last(); p++) {
+      const int64_t start = p * plane_offset;
+      for (int t = 0; t < length; t++) {
+        const int64_t row = start + t * step;
+        std::copy(&values[row], &values[row] + width, &scratch[row]);
+      }
+      for (int t = 0; t < length; t++) {
+        const int k_lo = std::max(-radius, -t), k_hi = std::min(radius, length - 1 - t);
+        T *out = &values[start + t * step];
+        std::fill(out, out + width, T(0.0f));
+        for (int k = k_lo; k <= k_hi; k++) {
+          const float w = weights[k + radius];
+          const T *in = &scratch[start + (t + k) * step];
+          for (int64_t i = 0; i < width; i++) {
+            out[i] += w * in[i];
+          }
+        }
+      }
+    }
+  });
+}
+
+}  // namespace
 
 template<typename T>
 void blur_binomial(const ivec3 &size, const int radius, const MutableSpan<T> values,
@@ -123,24 +192,11 @@ void blur_binomial(const ivec3 &size, const int radius, const MutableSpan<T> val
     binomial = binomial * double(2 * radius - k) / double(k + 1);
   }
   scratch.resize(size_t(values.size()));
-  const int64_t strides[3] = {1, int64_t(size.x), int64_t(size.x) * size.y};
-  for (int axis = 0; axis < 3; axis++) {
-    const int64_t stride = strides[axis];
-    const int length = size[axis];
-    std::copy(values.begin(), values.end(), scratch.begin());
-    parallel_for(values.size(), grid_grain, [&](const IndexRange range) {
-      for (int64_t v = range.start; v < range.one_after_last(); v++) {
-        const int at = int((v / stride) % length);
-        T sum(0.0f);
-        for (int k = -radius; k <= radius; k++) {
-          if (at + k >= 0 && at + k < length) {
-            sum += weights[size_t(k + radius)] * scratch[size_t(v + k * stride)];
-          }
-        }
-        values[v] = sum;
-      }
-    });
-  }
+  const MutableSpan<T> copy(scratch);
+  const int64_t sx = size.x, sxy = int64_t(size.x) * size.y;
+  blur_axis<T>(weights, int64_t(size.y) * size.z, sx, size.x, 1, 1, values, copy);
+  blur_axis<T>(weights, size.z, sxy, size.y, sx, sx, values, copy);
+  blur_axis<T>(weights, size.y, sx, size.z, sxy, sx, values, copy);
 }
 
 template void blur_binomial<float>(const ivec3 &, int, MutableSpan<float>, std::vector<float> &);

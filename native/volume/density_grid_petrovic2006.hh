@@ -32,6 +32,7 @@ constexpr int64_t max_grid_vertices = int64_t(1) << 22;
  * grid_grain vertices. */
 constexpr int64_t point_grain = 8192;
 constexpr int64_t grid_grain = 131072;
+constexpr int64_t blur_grain = 16384;
 inline int64_t slab_grain(const ivec3 &size)
 {
   return std::max<int64_t>(1, grid_grain / std::max<int64_t>(1, int64_t(size.x) * size.y));
@@ -86,6 +87,9 @@ struct HeadBox {
 
 /* Box of the finite points of `positions_wo` in the head's frame. */
 HeadBox head_box(Span<vec3> positions_wo, const mat4 &world_to_head);
+/* The same, keeping each point in the head's frame in r_positions_head (for bin_head_points). */
+HeadBox head_box(Span<vec3> positions_wo, const mat4 &world_to_head,
+                 MutableSpan<vec3> r_positions_head);
 
 /* The grid of spacing `cell_size` (coarsened to fit max_grid_vertices) covering `box` with
  * `margin` spare vertices on every side; `head_to_world` is the rigid head transform. */
@@ -94,10 +98,11 @@ GridFrame grid_around(const HeadBox &box, float cell_size, int margin, const mat
 /* Mean length of the segments of the strands (m), 0 for no segments. */
 float mean_segment_length(Span<int32_t> curve_offsets, Span<vec3> positions);
 
-/* Points located in a grid. Points outside it (or not finite) are in no cell. */
+/* Points located in a grid: per point, the index of the lowest vertex of its cell (-1 for a point
+ * outside the grid or not finite) and its place in that cell, each coordinate in [0, 1]. */
 struct PointBins {
-  std::vector<vec3> coords;     /* per point: grid coordinates */
-  std::vector<int32_t> cell_of; /* per point: cell index, or -1 outside */
+  std::vector<int32_t> vertex_of;
+  std::vector<vec3> fraction;
 };
 
 /* Points per chunk of a splat, and most chunks: set by the point count alone. */
@@ -105,6 +110,8 @@ constexpr int64_t splat_chunk_points = 32768;
 constexpr int64_t max_splat_chunks = 4;
 
 void bin_points(const GridFrame &grid, Span<vec3> positions_wo, PointBins &r_bins);
+/* bin_points for points already in the grid's head frame (the same bits). */
+void bin_head_points(const GridFrame &grid, Span<vec3> positions_head, PointBins &r_bins);
 
 /* r_grid[v] = Σ_i tent(P_i, v) · value_of(i) over the located points (eq. 1 with a value per
  * point; value_of(i) ≡ 1 is the density): each point adds its tent weights to its cell's 8
@@ -115,28 +122,46 @@ template<typename T, typename ValueFn>
 void splat_to_grid(const GridFrame &grid, const PointBins &bins, const ValueFn &value_of,
                    MutableSpan<T> r_grid, std::vector<T> &scratch)
 {
-  const int64_t points_num = int64_t(bins.cell_of.size());
+  const int64_t points_num = int64_t(bins.vertex_of.size());
   const int64_t vertices_num = grid.vertices_num();
   const int64_t chunks_num = std::clamp<int64_t>(
       (points_num + splat_chunk_points - 1) / splat_chunk_points, 1, max_splat_chunks);
   const int64_t chunk_size = (points_num + chunks_num - 1) / chunks_num;
   scratch.resize(size_t((chunks_num - 1) * vertices_num));
   const int64_t dy = grid.size.x, dz = int64_t(grid.size.x) * grid.size.y;
+  /* Per chunk, the vertices its points reach: [lo, hi). A chunk's own grid is zeroed and summed
+   * only there (nearby points of a groom are mostly neighbours in point order), which leaves
+   * the sums as they would be over whole grids. */
+  IndexRange reach[max_splat_chunks];
   parallel_for(chunks_num, 1, [&](const IndexRange chunks) {
     for (int64_t chunk = chunks.start; chunk < chunks.one_after_last(); chunk++) {
-      T *out = chunk == 0 ? r_grid.data() : scratch.data() + (chunk - 1) * vertices_num;
-      std::fill(out, out + vertices_num, T(0.0f));
-      const int64_t end = std::min(points_num, (chunk + 1) * chunk_size);
-      for (int64_t i = chunk * chunk_size; i < end; i++) {
-        if (bins.cell_of[size_t(i)] < 0) {
+      const int64_t begin = chunk * chunk_size, end = std::min(points_num, begin + chunk_size);
+      int64_t lo = vertices_num, hi = 0;
+      for (int64_t i = begin; i < end; i++) {
+        const int64_t vertex = bins.vertex_of[size_t(i)];
+        if (vertex >= 0) {
+          lo = std::min(lo, vertex);
+          hi = std::max(hi, vertex + dz + dy + 2);
+        }
+      }
+      T *out = r_grid.data();
+      if (chunk == 0) {
+        std::fill(out, out + vertices_num, T(0.0f));
+      }
+      else {
+        out = scratch.data() + (chunk - 1) * vertices_num;
+        std::fill(out + std::min(lo, hi), out + hi, T(0.0f));
+      }
+      reach[chunk] = IndexRange{std::min(lo, hi), hi - std::min(lo, hi)};
+      for (int64_t i = begin; i < end; i++) {
+        const int32_t vertex = bins.vertex_of[size_t(i)];
+        if (vertex < 0) {
           continue;
         }
-        const vec3 p = bins.coords[size_t(i)];
-        const ivec3 cell = glm::min(ivec3(glm::floor(p)), grid.size - 2);
-        const vec3 f = p - vec3(cell);
+        const vec3 f = bins.fraction[size_t(i)];
         const T value = value_of(i);
         const float wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
-        T *base = out + grid.vertex_index(cell.x, cell.y, cell.z);
+        T *base = out + vertex;
         for (int c = 0; c < 4; c++) {
           const T row = (wy[c & 1] * wz[c >> 1]) * value;
           T *at = base + (c & 1) * dy + (c >> 1) * dz;
@@ -148,12 +173,13 @@ void splat_to_grid(const GridFrame &grid, const PointBins &bins, const ValueFn &
   });
   if (chunks_num > 1) {
     parallel_for(vertices_num, grid_grain, [&](const IndexRange range) {
-      for (int64_t v = range.start; v < range.one_after_last(); v++) {
-        T sum = r_grid[v];
-        for (int64_t chunk = 1; chunk < chunks_num; chunk++) {
-          sum += scratch[size_t((chunk - 1) * vertices_num + v)];
+      for (int64_t chunk = 1; chunk < chunks_num; chunk++) {
+        const T *values = scratch.data() + (chunk - 1) * vertices_num;
+        const int64_t lo = std::max(range.start, reach[chunk].start);
+        const int64_t hi = std::min(range.one_after_last(), reach[chunk].one_after_last());
+        for (int64_t v = lo; v < hi; v++) {
+          r_grid[v] += values[v];
         }
-        r_grid[v] = sum;
       }
     });
   }
@@ -173,13 +199,28 @@ inline bool locate(const GridFrame &grid, const vec3 &p, ivec3 &r_cell, vec3 &r_
   {
     return false;
   }
-  r_cell = glm::min(ivec3(glm::floor(p)), grid.size - 2);
+  r_cell = glm::min(ivec3(p), grid.size - 2); /* p ≥ 0: truncation is the floor */
   r_fraction = p - vec3(r_cell);
   return true;
 }
 
-/* Trilinear interpolation of vertex values at grid coordinates `p` (the tent weights of eq. 1
- * read back); T(0) outside the grid. */
+/* Trilinear interpolation (the tent weights of eq. 1 read back) in the cell whose lowest vertex
+ * is `vertex`, at place `f` in it. */
+template<typename T>
+T sample_cell(const GridFrame &grid, const Span<T> values, const int64_t vertex, const vec3 &f)
+{
+  const int64_t dy = grid.size.x, dz = int64_t(grid.size.x) * grid.size.y;
+  const T *v = values.data() + vertex;
+  const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
+  T sum(0.0f);
+  for (int c = 0; c < 8; c++) {
+    const int x = c & 1, y = (c >> 1) & 1, z = c >> 2;
+    sum += (wx[x] * wy[y] * wz[z]) * v[x + y * dy + z * dz];
+  }
+  return sum;
+}
+
+/* The same at grid coordinates `p`; T(0) outside the grid. */
 template<typename T> T sample_grid(const GridFrame &grid, Span<T> values, const vec3 &p)
 {
   ivec3 cell;
@@ -187,14 +228,7 @@ template<typename T> T sample_grid(const GridFrame &grid, Span<T> values, const 
   if (!locate(grid, p, cell, f)) {
     return T(0.0f);
   }
-  T sum(0.0f);
-  for (int c = 0; c < 8; c++) {
-    const ivec3 corner = ivec3(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-    const float w = (corner.x ? f.x : 1.0f - f.x) * (corner.y ? f.y : 1.0f - f.y) *
-                    (corner.z ? f.z : 1.0f - f.z);
-    sum += w * values[grid.vertex_index(cell.x + corner.x, cell.y + corner.y, cell.z + corner.z)];
-  }
-  return sum;
+  return sample_cell(grid, values, grid.vertex_index(cell.x, cell.y, cell.z), f);
 }
 
 /* Separable binomial filter of radius r (weights C(2r, r + k) / 4^r along each axis, zero

@@ -24,12 +24,13 @@ void density_forces(const GridFrame &grid, const PointBins &bins, const Span<flo
 {
   parallel_for(r_forces.size(), point_grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      ivec3 cell;
-      vec3 f;
-      if (bins.cell_of[size_t(i)] < 0 || !locate(grid, bins.coords[size_t(i)], cell, f)) {
+      const int32_t vertex = bins.vertex_of[size_t(i)];
+      if (vertex < 0) {
         r_forces[i] = vec3(0.0f);
         continue;
       }
+      const vec3 f = bins.fraction[size_t(i)];
+      const int64_t dy = grid.size.x, dz = int64_t(grid.size.x) * grid.size.y;
       /* −∂E/∂P = −Σ_corners D_d ∂w/∂P (the force after eq. 3). */
       vec3 force(0.0f);
       for (int c = 0; c < 8; c++) {
@@ -38,8 +39,7 @@ void density_forces(const GridFrame &grid, const PointBins &bins, const Span<flo
                      corner.z ? f.z : 1.0f - f.z);
         const vec3 sign(corner.x ? -1.0f : 1.0f, corner.y ? -1.0f : 1.0f,
                         corner.z ? -1.0f : 1.0f);
-        const float d = difference[grid.vertex_index(cell.x + corner.x, cell.y + corner.y,
-                                                     cell.z + corner.z)];
+        const float d = difference[vertex + corner.x + corner.y * dy + corner.z * dz];
         force += d * sign * vec3(w.y * w.z, w.x * w.z, w.x * w.y);
       }
       /* On a vertex plane the derivative is taken as 0 (§5.2). */

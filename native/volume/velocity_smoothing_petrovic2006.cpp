@@ -6,9 +6,9 @@
 
 namespace hairdyn {
 
-void grid_velocities_at_points(const GridFrame &grid, const PointBins &bins,
-                               const Span<vec3> velocities, const int filter_radius,
-                               VelocityGrids &grids, const MutableSpan<vec3> r_grid_velocities)
+void smooth_grid_velocity(const GridFrame &grid, const PointBins &bins,
+                          const Span<vec3> velocities, const int filter_radius,
+                          VelocityGrids &grids)
 {
   const int64_t vertices_num = grid.vertices_num();
   grids.momentum_density.resize(size_t(vertices_num));
@@ -31,24 +31,18 @@ void grid_velocities_at_points(const GridFrame &grid, const PointBins &bins,
       v_grid[v] = m.w > 0.0f ? vec3(m) / m.w : vec3(0.0f);
     }
   });
-  /* B V, read back with the tent weights. */
+  /* B V. */
   blur_binomial(grid.size, filter_radius, v_grid, grids.scratch3);
-  parallel_for(velocities.size(), point_grain, [&](const IndexRange range) {
-    for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      r_grid_velocities[i] = bins.cell_of[size_t(i)] < 0 ?
-                                 velocities[i] :
-                                 sample_grid(grid, Span<vec3>(v_grid), bins.coords[size_t(i)]);
-    }
-  });
 }
 
-void drag_toward(const Span<vec3> grid_velocities, const float strength, const float h,
-                 const Span<int32_t> curve_offsets, const MutableSpan<vec3> positions,
-                 const MutableSpan<vec3> velocities)
+void drag_toward(const GridFrame &grid, const PointBins &bins, const VelocityGrids &grids,
+                 const float strength, const float h, const Span<int32_t> curve_offsets,
+                 const MutableSpan<vec3> positions, const MutableSpan<vec3> velocities)
 {
   for_each_free_point(curve_offsets, velocities.size(), [&](const int64_t i) {
-    const vec3 dv = strength * (grid_velocities[i] - velocities[i]);
-    velocities[i] += dv;
+    const vec3 v = velocities[i];
+    const vec3 dv = strength * (grid_velocity_at(grid, grids, bins, i, v) - v);
+    velocities[i] = v + dv;
     positions[i] += h * dv;
   });
 }

@@ -35,17 +35,27 @@ struct VelocityGrids {
   float density_max = 0.0f; /* eq. 1's largest value on the grid, before filtering */
 };
 
-/* Per point, the smoothed grid velocity T v at its position; a point outside the grid keeps
- * its own velocity. `bins` must hold the points of `velocities` binned on `grid`. */
-void grid_velocities_at_points(const GridFrame &grid, const PointBins &bins,
-                               Span<vec3> velocities, int filter_radius, VelocityGrids &grids,
-                               MutableSpan<vec3> r_grid_velocities);
+/* B V on the grid's vertices, into grids.velocity. `bins` must hold the points of `velocities`
+ * binned on `grid`. */
+void smooth_grid_velocity(const GridFrame &grid, const PointBins &bins, Span<vec3> velocities,
+                          int filter_radius, VelocityGrids &grids);
 
-/* §5.1's drag: v ← v + s (V − v) for every point except the roots of `curve_offsets` (empty:
- * every point); the positions move by h times the change of velocity, as if the drag had
- * acted through the substep of length h. */
-void drag_toward(Span<vec3> grid_velocities, float strength, float h,
-                 Span<int32_t> curve_offsets, MutableSpan<vec3> positions,
-                 MutableSpan<vec3> velocities);
+/* The smoothed grid velocity (T v)_i at point i's position, read back with the tent weights; a
+ * point outside the grid keeps its own velocity `v`. */
+inline vec3 grid_velocity_at(const GridFrame &grid, const VelocityGrids &grids,
+                             const PointBins &bins, const int64_t i, const vec3 &v)
+{
+  const int32_t vertex = bins.vertex_of[size_t(i)];
+  return vertex < 0 ? v :
+                      sample_cell(grid, Span<vec3>(grids.velocity), vertex,
+                                  bins.fraction[size_t(i)]);
+}
+
+/* §5.1's drag toward the grid velocity of smooth_grid_velocity: v ← v + s (V − v) for every point
+ * except the roots of `curve_offsets` (empty: every point); the positions move by h times the
+ * change of velocity, as if the drag had acted through the substep of length h. */
+void drag_toward(const GridFrame &grid, const PointBins &bins, const VelocityGrids &grids,
+                 float strength, float h, Span<int32_t> curve_offsets,
+                 MutableSpan<vec3> positions, MutableSpan<vec3> velocities);
 
 }  // namespace hairdyn

@@ -70,17 +70,18 @@ void VolumePass::apply(const SubstepState &state)
                               min_segment_length(state.positions_wo));
   }
   const mat4 head_to_world = rigid_head_to_world(state.head_to_world);
-  const HeadBox hair_box = head_box(state.positions_wo, glm::inverse(head_to_world));
-  point_values_.resize(size_t(points_num));
+  const mat4 world_to_head = glm::inverse(head_to_world);
+  positions_head_.resize(size_t(points_num));
+  const HeadBox hair_box = head_box(state.positions_wo, world_to_head, positions_head_);
 
   /* §5.1: velocity smoothing on the grid of spacing h. */
   const GridFrame grid = grid_around(hair_box, cell_size_, params_.filter_radius + 1,
                                      head_to_world);
-  bin_points(grid, state.positions_wo, bins_);
+  bin_head_points(grid, positions_head_, bins_);
   if (params_.smoothing > 0.0f) {
-    grid_velocities_at_points(grid, bins_, state.velocities_wo, params_.filter_radius,
-                              velocity_grids_, point_values_);
-    drag_toward(point_values_, params_.smoothing, state.h, state.curve_offsets,
+    smooth_grid_velocity(grid, bins_, state.velocities_wo, params_.filter_radius,
+                         velocity_grids_);
+    drag_toward(grid, bins_, velocity_grids_, params_.smoothing, state.h, state.curve_offsets,
                 state.positions_wo, state.velocities_wo);
     density_max_ = velocity_grids_.density_max;
   }
@@ -93,21 +94,25 @@ void VolumePass::apply(const SubstepState &state)
 
   /* §5.2: the density force toward the target, coarse to fine. */
   if (has_target() && params_.target_strength > 0.0f) {
+    if (params_.smoothing > 0.0f) {
+      head_box(state.positions_wo, world_to_head, positions_head_); /* the drag moved them */
+    }
     HeadBox box = hair_box;
     box.include(target_.box());
     /* The error on the finest grid, of the state before the targeting force. */
     if (level_ > 0) {
       const GridFrame fine_grid = grid_around(box, cell_size_, 1, head_to_world);
-      bin_points(fine_grid, state.positions_wo, bins_);
+      bin_head_points(fine_grid, positions_head_, bins_);
       target_error_ = hairdyn::target_error(fine_grid, bins_, target_, target_grids_);
     }
     const GridFrame level_grid = grid_around(box, std::ldexp(cell_size_, level_), 1,
                                              head_to_world);
-    bin_points(level_grid, state.positions_wo, bins_);
+    bin_head_points(level_grid, positions_head_, bins_);
     const double error = hairdyn::target_error(level_grid, bins_, target_, target_grids_);
     if (level_ == 0) {
       target_error_ = error;
     }
+    point_values_.resize(size_t(points_num));
     density_forces(level_grid, bins_, target_grids_.difference, point_values_);
     const float kick = state.h * params_.target_strength;
     for_each_free_point(state.curve_offsets, points_num, [&](const int64_t i) {

@@ -63,7 +63,8 @@ class VolumePass : public SubstepPass {
   PointBins bins_;
   VelocityGrids velocity_grids_;
   TargetGrids target_grids_;
-  std::vector<vec3> point_values_;
+  std::vector<vec3> positions_head_;
+  std::vector<vec3> point_values_; /* the targeting force per point */
 };
 
 }  // namespace hairdyn
