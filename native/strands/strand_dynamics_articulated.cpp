@@ -39,17 +39,37 @@ namespace hairdyn {
 
 namespace {
 
+/* The recursion runs in double precision: I^a = I^A − U D⁻¹ Uᵀ cancels most of a body's
+ * inertia when its hinge is free (short steps leave little of the springs' armature in D),
+ * and in single precision what remains of a strand of fine segments (1e-11 kg m² per
+ * segment of human hair) was noise: D⁻¹ came out tens of times too large, or indefinite,
+ * and the chain ran away. */
+using rvec2 = glm::dvec2;
+using rvec3 = glm::dvec3;
+using rmat2 = glm::dmat2;
+using rmat3 = glm::dmat3;
+
+inline rvec3 real(const vec3 &v)
+{
+  return rvec3(v);
+}
+
+inline rmat3 cross_matrix(const rvec3 &v)
+{
+  return rmat3(0.0, v.z, -v.y, -v.z, 0.0, v.x, v.y, -v.x, 0.0);
+}
+
 /* One body of the chain during a substep. */
 struct Body {
-  vec3 s_theta, s_phi;      /* the hinge's axes: q̇ turns the body by θ̇ s_θ + φ̇ s_φ */
-  vec3 arm;                 /* r, from the parent's hinge point to this one */
-  vec3 bias_angular;        /* velocity-product accelerations across the hinge (c_i) */
-  vec3 bias_linear;
-  mat3 a, b, c;             /* articulated inertia at P_i, blocks [a b; bᵀ c] */
-  vec3 p_torque, p_force;   /* articulated bias force at P_i */
-  vec3 u_angular[2], u_linear[2]; /* U = I^A S, one column per hinge axis */
-  glm::mat2 d_inverse;
-  vec2 u;                   /* τ − Sᵀ p^A */
+  rvec3 s_theta, s_phi;      /* the hinge's axes: q̇ turns the body by θ̇ s_θ + φ̇ s_φ */
+  rvec3 arm;                 /* r, from the parent's hinge point to this one */
+  rvec3 bias_angular;        /* velocity-product accelerations across the hinge (c_i) */
+  rvec3 bias_linear;
+  rmat3 a, b, c;             /* articulated inertia at P_i, blocks [a b; bᵀ c] */
+  rvec3 p_torque, p_force;   /* articulated bias force at P_i */
+  rvec3 u_angular[2], u_linear[2]; /* U = I^A S, one column per hinge axis */
+  rmat2 d_inverse;
+  rvec2 u;                   /* τ − Sᵀ p^A */
 };
 
 /* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
@@ -65,9 +85,9 @@ constexpr float axial_inertia_share = 1.0f;
 thread_local std::vector<Body> bodies;
 thread_local std::vector<vec3> substep_start; /* a strand's nodes where a cut substep began */
 
-inline mat3 outer(const vec3 &x, const vec3 &y)
+inline rmat3 outer(const rvec3 &x, const rvec3 &y)
 {
-  return mat3(x * y.x, x * y.y, x * y.z); /* x yᵀ, column-major */
+  return rmat3(x * y.x, x * y.y, x * y.z); /* x yᵀ, column-major */
 }
 
 }  // namespace
@@ -158,14 +178,14 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     const Deflection deflection(trig_[i]);
     frame = deflection.rotate(chart);
     const vec3 t = frame[2];
-    body.s_theta = frame[1];
-    body.s_phi = -chart[0];
+    body.s_theta = real(frame[1]);
+    body.s_phi = -real(chart[0]);
     const vec2 rate = angular_velocities_[i];
-    const vec3 relative_turn = rate.x * body.s_theta + rate.y * body.s_phi;
-    body.arm = arm;
-    body.bias_angular = glm::cross(parent_omega, relative_turn) -
-                        (rate.x * rate.y) * glm::cross(chart[0], body.s_theta);
-    body.bias_linear = glm::cross(parent_omega, glm::cross(parent_omega, arm));
+    const vec3 relative_turn = rate.x * frame[1] - rate.y * chart[0];
+    body.arm = real(arm);
+    body.bias_angular = glm::cross(real(parent_omega), real(relative_turn)) -
+                        double(rate.x * rate.y) * glm::cross(real(chart[0]), body.s_theta);
+    body.bias_linear = glm::cross(real(parent_omega), glm::cross(real(parent_omega), body.arm));
     node += arm;
     node_velocity += glm::cross(parent_omega, arm);
     const vec3 omega = parent_omega + relative_turn;
@@ -187,14 +207,17 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     /* The rod's inertia about P_i: m d² / 3 about every axis through P_i, its own axis
      * included (see axial_inertia_share), and the gyroscopic torque ω × (I ω) of that
      * inertia. */
-    const float transverse = m * d * d / 3.0f;
-    const float spinless = 1.0f - axial_inertia_share;
-    body.a = transverse * (mat3(1.0f) - spinless * outer(t, t));
-    body.b = m * cross_matrix(half);
-    body.c = mat3(m);
-    body.p_torque = -(spinless * transverse) * glm::dot(t, omega) * glm::cross(omega, t) -
-                    glm::cross(half, force);
-    body.p_force = m * glm::cross(omega, glm::cross(omega, half)) - force;
+    const double transverse = double(m) * d * d / 3.0;
+    const double spinless = 1.0 - double(axial_inertia_share);
+    const rvec3 t_real = real(t), omega_real = real(omega), half_real = real(half);
+    body.a = transverse * (rmat3(1.0) - spinless * outer(t_real, t_real));
+    body.b = double(m) * cross_matrix(half_real);
+    body.c = rmat3(double(m));
+    body.p_torque = -(spinless * transverse) * glm::dot(t_real, omega_real) *
+                        glm::cross(omega_real, t_real) -
+                    glm::cross(half_real, real(force));
+    body.p_force = double(m) * glm::cross(omega_real, glm::cross(omega_real, half_real)) -
+                   real(force);
 
     parent_omega = omega;
     arm = d * t;
@@ -211,49 +234,50 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
    * I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the parent's hinge point. */
   for (size_t i = end; i-- > first;) {
     Body &body = bodies[i - first];
-    const vec3 axes[2] = {body.s_theta, body.s_phi};
+    const rvec3 axes[2] = {body.s_theta, body.s_phi};
     for (int j = 0; j < 2; j++) {
       body.u_angular[j] = body.a * axes[j];
       body.u_linear[j] = glm::transpose(body.b) * axes[j];
     }
-    const float k = hinge_stiffness_[i];
-    const float gamma = params_.bending_damping * k; /* Kelvin–Voigt: γ = τ k */
-    const vec2 q = angles_[i];
-    const vec2 rate = angular_velocities_[i];
+    const double k = hinge_stiffness_[i];
+    const double gamma = double(params_.bending_damping) * k; /* Kelvin–Voigt: γ = τ k */
+    const rvec2 q(angles_[i]);
+    const rvec2 rate(angular_velocities_[i]);
+    const double hd = h;
     /* The hinge spring and damper, linearly implicit (see the top of the file). */
-    const float armature = implicit ? h * gamma + h * h * k : 0.0f;
-    const vec2 hinge_torque = -k * q - (implicit ? gamma + h * k : gamma) * rate;
-    glm::mat2 d_matrix(glm::dot(axes[0], body.u_angular[0]), glm::dot(axes[1], body.u_angular[0]),
-                       glm::dot(axes[0], body.u_angular[1]), glm::dot(axes[1], body.u_angular[1]));
+    const double armature = implicit ? hd * gamma + hd * hd * k : 0.0;
+    const rvec2 hinge_torque = -k * q - (implicit ? gamma + hd * k : gamma) * rate;
+    rmat2 d_matrix(glm::dot(axes[0], body.u_angular[0]), glm::dot(axes[1], body.u_angular[0]),
+                   glm::dot(axes[0], body.u_angular[1]), glm::dot(axes[1], body.u_angular[1]));
     d_matrix[0][0] += armature;
     d_matrix[1][1] += armature;
     body.d_inverse = glm::inverse(d_matrix);
-    body.u = hinge_torque - vec2(glm::dot(axes[0], body.p_torque),
-                                 glm::dot(axes[1], body.p_torque));
+    body.u = hinge_torque - rvec2(glm::dot(axes[0], body.p_torque),
+                                  glm::dot(axes[1], body.p_torque));
     if (i == first) {
       break;
     }
     /* I^a = I^A − U D⁻¹ Uᵀ, blockwise. */
-    const glm::mat2 &di = body.d_inverse;
-    const vec3 wa0 = di[0][0] * body.u_angular[0] + di[0][1] * body.u_angular[1];
-    const vec3 wa1 = di[1][0] * body.u_angular[0] + di[1][1] * body.u_angular[1];
-    const vec3 wl0 = di[0][0] * body.u_linear[0] + di[0][1] * body.u_linear[1];
-    const vec3 wl1 = di[1][0] * body.u_linear[0] + di[1][1] * body.u_linear[1];
+    const rmat2 &di = body.d_inverse;
+    const rvec3 wa0 = di[0][0] * body.u_angular[0] + di[0][1] * body.u_angular[1];
+    const rvec3 wa1 = di[1][0] * body.u_angular[0] + di[1][1] * body.u_angular[1];
+    const rvec3 wl0 = di[0][0] * body.u_linear[0] + di[0][1] * body.u_linear[1];
+    const rvec3 wl1 = di[1][0] * body.u_linear[0] + di[1][1] * body.u_linear[1];
     /* U D⁻¹ Uᵀ = Σ_jk U_j (D⁻¹)_jk U_kᵀ = Σ_k (U D⁻¹)_k U_kᵀ. */
-    const mat3 a = body.a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
-    const mat3 b = body.b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
-    const mat3 c = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
-    const vec2 du = di * body.u;
-    const vec3 pa_torque = body.p_torque + a * body.bias_angular + b * body.bias_linear +
-                           du.x * body.u_angular[0] + du.y * body.u_angular[1];
-    const vec3 pa_force = body.p_force + glm::transpose(b) * body.bias_angular +
-                          c * body.bias_linear + du.x * body.u_linear[0] +
-                          du.y * body.u_linear[1];
+    const rmat3 a = body.a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
+    const rmat3 b = body.b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
+    const rmat3 c = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
+    const rvec2 du = di * body.u;
+    const rvec3 pa_torque = body.p_torque + a * body.bias_angular + b * body.bias_linear +
+                            du.x * body.u_angular[0] + du.y * body.u_angular[1];
+    const rvec3 pa_force = body.p_force + glm::transpose(b) * body.bias_angular +
+                           c * body.bias_linear + du.x * body.u_linear[0] +
+                           du.y * body.u_linear[1];
     /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c, c. */
     Body &parent = bodies[i - 1 - first];
-    const mat3 r = cross_matrix(body.arm);
-    const mat3 rc = r * c;
-    const mat3 br = b * r;
+    const rmat3 r = cross_matrix(body.arm);
+    const rmat3 rc = r * c;
+    const rmat3 br = b * r;
     parent.a += a - br + glm::transpose(-br) - rc * r;
     parent.b += b + rc;
     parent.c += c;
@@ -264,20 +288,21 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
   /* Pass 3, root to tip (Table 7.1, third loop): q̈ = D⁻¹ (u − Uᵀ a'), with a' the parent's
    * acceleration moved to this hinge plus c; the root is fixed in the head's frame. Then
    * q̇ += h q̈, q += h q̇ (semi-implicit Euler; the springs already implicit through D). */
-  vec3 parent_alpha(0.0f);
-  vec3 parent_acceleration(0.0f);
+  rvec3 parent_alpha(0.0);
+  rvec3 parent_acceleration(0.0);
   for (size_t i = first; i < end; i++) {
     const Body &body = bodies[i - first];
-    const vec3 alpha = parent_alpha + body.bias_angular;
-    const vec3 acceleration = parent_acceleration + glm::cross(parent_alpha, body.arm) +
-                              body.bias_linear;
-    const vec2 ut_a(glm::dot(body.u_angular[0], alpha) + glm::dot(body.u_linear[0], acceleration),
-                    glm::dot(body.u_angular[1], alpha) + glm::dot(body.u_linear[1], acceleration));
-    const vec2 q_acceleration = body.d_inverse * (body.u - ut_a);
+    const rvec3 alpha = parent_alpha + body.bias_angular;
+    const rvec3 acceleration = parent_acceleration + glm::cross(parent_alpha, body.arm) +
+                               body.bias_linear;
+    const rvec2 ut_a(
+        glm::dot(body.u_angular[0], alpha) + glm::dot(body.u_linear[0], acceleration),
+        glm::dot(body.u_angular[1], alpha) + glm::dot(body.u_linear[1], acceleration));
+    const rvec2 q_acceleration = body.d_inverse * (body.u - ut_a);
     parent_alpha = alpha + q_acceleration.x * body.s_theta + q_acceleration.y * body.s_phi;
     parent_acceleration = acceleration;
     vec2 &omega = angular_velocities_[i];
-    omega += h * q_acceleration;
+    omega += h * vec2(q_acceleration);
     if (!(std::abs(omega.x) + std::abs(omega.y) < runaway_speed / rest_lengths_[i])) {
       return false; /* Runaway or not a number: caught before it reaches a collider. */
     }
