@@ -179,3 +179,37 @@ TEST(MeshDistance, PenetrationStats)
   stats = penetration_stats(distance, mat4(1.0f), Span<vec3>(), 0.1f);
   EXPECT_EQ(stats.share, 0.0f);
 }
+
+/* The report's repeated calls skip points that cannot have reached the mesh since the last
+ * call (the signed distance is 1-Lipschitz): over frames of a cloud that drifts by small steps,
+ * jumps now and then, and moves with the mesh's transform, the depths are those of a fresh
+ * query for every point. */
+TEST(MeshDistance, RepeatedDepthsSkipOnlyPointsThatStayedOut)
+{
+  const TestMesh m = uv_sphere(1.0f, 48, 24);
+  const MeshDistance distance(m.vertices, m.triangles);
+  std::mt19937 rng(5);
+  std::normal_distribution<float> gauss;
+  std::vector<vec3> points(3000);
+  for (vec3 &p : points) {
+    p = 1.3f * vec3(gauss(rng), gauss(rng), gauss(rng));
+  }
+  int64_t inside_num = 0;
+  for (int frame = 0; frame < 30; frame++) {
+    const mat4 object_to_world = glm::translate(mat4(1.0f), vec3(0.02f * float(frame), 0, 0)) *
+                                 glm::rotate(mat4(1.0f), 0.05f * float(frame), vec3(0, 0, 1));
+    for (size_t i = 0; i < points.size(); i++) {
+      const float step = i % 97 == size_t(frame) % 97 ? 1.0f : 0.03f; /* a few jump */
+      points[i] += step * vec3(gauss(rng), gauss(rng), gauss(rng));
+    }
+    std::vector<float> depths(points.size(), 0.0f);
+    accumulate_penetration_depths(distance, object_to_world, points, depths);
+    const mat4 world_to_object = glm::inverse(object_to_world);
+    for (size_t i = 0; i < points.size(); i++) {
+      const float expected = distance.depth(transform_point(world_to_object, points[i]));
+      ASSERT_EQ(depths[i], expected) << "frame " << frame << ", point " << i;
+      inside_num += expected > 0.0f;
+    }
+  }
+  EXPECT_GT(inside_num, 1000) << "the cloud must reach into the sphere";
+}

@@ -288,12 +288,14 @@ ClosestPoint TriangleBVH::closest_point(const vec3 &p, const float max_distance_
   if (nodes_.empty()) {
     return best;
   }
-  /* Small fixed-capacity stacks would be a fixed maximum count; the depth of a median-split
-   * tree is log2(T), so a vector that grows once per query is cheap enough here. */
-  std::vector<int32_t> stack{0};
-  while (!stack.empty()) {
-    const int32_t node_index = stack.back();
-    stack.pop_back();
+  /* A median-split tree of at most 2^31 triangles is at most 32 levels deep, and a depth-first
+   * walk keeps at most one pending sibling per level: 64 entries always suffice (no
+   * allocation per query, which cost as much as the walk on small meshes). */
+  int32_t stack[64];
+  int stack_size = 0;
+  stack[stack_size++] = 0;
+  while (stack_size > 0) {
+    const int32_t node_index = stack[--stack_size];
     const Node &node = nodes_[size_t(node_index)];
     if (box_distance_sq(p, node.min, node.max) >= best.distance_sq) {
       continue;
@@ -305,12 +307,12 @@ ClosestPoint TriangleBVH::closest_point(const vec3 &p, const float max_distance_
       const float d_right = box_distance_sq(p, right.min, right.max);
       /* Nearer child on top of the stack, visited first. */
       if (d_left < d_right) {
-        stack.push_back(node.first_or_right);
-        stack.push_back(node_index + 1);
+        stack[stack_size++] = node.first_or_right;
+        stack[stack_size++] = node_index + 1;
       }
       else {
-        stack.push_back(node_index + 1);
-        stack.push_back(node.first_or_right);
+        stack[stack_size++] = node_index + 1;
+        stack[stack_size++] = node.first_or_right;
       }
       continue;
     }

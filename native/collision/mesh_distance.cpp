@@ -98,6 +98,44 @@ float MeshDistance::depth(const vec3 &p) const
   return std::max(-signed_distance(p), 0.0f);
 }
 
+void MeshDistance::accumulate_depths(const mat4 &world_to_object, const float scale,
+                                     const Span<vec3> points_wo,
+                                     const MutableSpan<float> r_depth) const
+{
+  std::lock_guard<std::mutex> lock(bounds_->mutex);
+  std::vector<vec3> &reference = bounds_->points;
+  std::vector<float> &bound = bounds_->distances;
+  if (reference.size() != size_t(points_wo.size())) {
+    reference.assign(size_t(points_wo.size()), vec3(0.0f));
+    bound.assign(size_t(points_wo.size()), -1.0f); /* nothing known */
+  }
+  const vec3 lo = bvh_.bounds_min(), hi = bvh_.bounds_max();
+  /* What float rounding of a distance may miss, in object units. */
+  const float slack = 1e-5f * glm::length(hi - lo);
+  parallel_for(points_wo.size(), 256, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      const vec3 p = transform_point(world_to_object, points_wo[i]);
+      if (bound[size_t(i)] - glm::length(p - reference[size_t(i)]) > slack) {
+        continue; /* still outside */
+      }
+      float distance;
+      if (!is_finite(p)) {
+        distance = -1.0f;
+      }
+      else if (p.x < lo.x || p.y < lo.y || p.z < lo.z || p.x > hi.x || p.y > hi.y || p.z > hi.z) {
+        /* Outside the bounding box: the distance to the box bounds the distance to the mesh. */
+        distance = glm::length(glm::max(glm::max(lo - p, p - hi), vec3(0.0f)));
+      }
+      else {
+        distance = signed_distance(p);
+        r_depth[i] = std::max(r_depth[i], std::max(-distance, 0.0f) * scale);
+      }
+      reference[size_t(i)] = p;
+      bound[size_t(i)] = distance;
+    }
+  });
+}
+
 float uniform_scale(const mat4 &m)
 {
   return std::cbrt(std::abs(glm::determinant(mat3(m))));
@@ -107,14 +145,8 @@ void accumulate_penetration_depths(const MeshDistance &mesh, const mat4 &object_
                                    const Span<vec3> points_wo, const MutableSpan<float> r_depth_wo)
 {
   assert(points_wo.size() == r_depth_wo.size());
-  const mat4 world_to_object = glm::inverse(object_to_world);
-  const float scale = uniform_scale(object_to_world);
-  parallel_for(points_wo.size(), 256, [&](const IndexRange range) {
-    for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      const float depth = mesh.depth(transform_point(world_to_object, points_wo[i])) * scale;
-      r_depth_wo[i] = std::max(r_depth_wo[i], depth);
-    }
-  });
+  mesh.accumulate_depths(glm::inverse(object_to_world), uniform_scale(object_to_world), points_wo,
+                         r_depth_wo);
 }
 
 PenetrationStats penetration_stats(const Span<float> depths_wo, const float tolerance_wo)

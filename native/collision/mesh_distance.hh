@@ -5,6 +5,8 @@
  * normal, the sum of the two face normals of an edge, or the angle-weighted sum of a vertex's
  * face normals. Exact for closed, consistently wound meshes; on an open mesh the sign is that
  * of the nearest surface's front side, which is still right near the surface. */
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "collision/bvh.hh"
@@ -23,9 +25,24 @@ class MeshDistance {
   float signed_distance(const vec3 &p) const;
   /* Depth inside the mesh (> 0), or 0 outside; cheap for points outside the bounding box. */
   float depth(const vec3 &p) const;
+  /* r_depth[i] = max(r_depth[i], depth(world_to_object · points_wo[i]) · scale). Each call
+   * remembers, per index, a point and a lower bound of its signed distance; the signed
+   * distance is 1-Lipschitz (|S(p) − S(q)| ≤ |p − q|), so a point that cannot have reached the
+   * surface since (bound − distance moved > 0) is outside without a query. Hair moves
+   * millimetres per frame and mostly stays centimetres out, so most queries of a frame's
+   * penetration report are skipped; the depths are the same. Safe from several threads. */
+  void accumulate_depths(const mat4 &world_to_object, float scale, Span<vec3> points_wo,
+                         MutableSpan<float> r_depth) const;
   const TriangleBVH &bvh() const { return bvh_; }
 
  private:
+  struct Bounds {
+    std::mutex mutex;
+    std::vector<vec3> points;     /* object space */
+    std::vector<float> distances; /* lower bounds of the signed distance there */
+  };
+  std::shared_ptr<Bounds> bounds_ = std::make_shared<Bounds>();
+
   TriangleBVH bvh_;
   std::vector<vec3> face_normals_;   /* Unit, per triangle. */
   std::vector<vec3> edge_normals_;   /* Per triangle corner k: edge (k, k+1). */
