@@ -50,6 +50,7 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   }
   g.point_curve.resize(size_t(points_num));
   g.segment_curve.resize(size_t(segments_num));
+  g.segment_sweep.resize(size_t(segments_num));
   g.box_min.resize(size_t(segments_num));
   g.box_max.resize(size_t(segments_num));
   g.cell_min.resize(size_t(segments_num));
@@ -76,11 +77,14 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
             const float r = radii.is_empty() ? default_radius : 0.5f * (radii[p] + radii[p + 1]);
             const vec3 a = positions[p], e = positions[p + 1];
             vec3 lo = glm::min(a, e), hi = glm::max(a, e);
+            float sweep = 0.0f;
             if (start.sweeps()) {
               const vec3 a0 = start[p], e0 = start[p + 1];
               lo = glm::min(lo, glm::min(a0, e0));
               hi = glm::max(hi, glm::max(a0, e0));
+              sweep = std::max(glm::length(a - a0), glm::length(e - e0));
             }
+            g.segment_sweep[k] = sweep;
             g.box_min[k] = lo - vec3(r);
             g.box_max[k] = hi + vec3(r);
             b.lo = glm::min(b.lo, g.box_min[k]);
@@ -246,7 +250,8 @@ struct PairContext {
 /* The narrow phase of one pair of segments (first points pi < pj): true, with the contact
  * and its §5.3 response, when their swept spheres overlap at the end of the substep or passed
  * through each other during it. */
-bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, SegmentContact &r_c)
+bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const float sweeps,
+               SegmentContact &r_c)
 {
   const Span<vec3> x = ctx.x;
   const vec3 a0 = x[pi], a1 = x[pi + 1], b0 = x[pj], b1 = x[pj + 1];
@@ -267,7 +272,10 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, Segme
    * flipped and, at the moment the lines were coplanar, the segments touched. */
   bool crossed = false;
   float side0 = 0.0f;
-  if (ctx.start.sweeps() && !parallel) {
+  /* Every point of a segment moved at most its nodes' largest move (`sweeps`, both segments
+   * together), so pairs whose lines end farther apart than that plus the radii never touched. */
+  const float reach = radii_sum + sweeps;
+  if (ctx.start.sweeps() && !parallel && f1 * f1 <= reach * reach * nn1) {
     const vec3 A0 = ctx.start[pi], A1 = ctx.start[pi + 1], B0 = ctx.start[pj],
                B1 = ctx.start[pj + 1];
     side0 = side_volume(A0, A1, B0, B1);
@@ -443,7 +451,9 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                 }
                 tested++;
                 SegmentContact contact;
-                if (test_pair(ctx, pi, pj, contact)) {
+                const float sweeps = g.segment_sweep[size_t(a.point - int32_t(a.curve_flags >> 3))] +
+                                     g.segment_sweep[size_t(b.point - int32_t(b.curve_flags >> 3))];
+                if (test_pair(ctx, pi, pj, sweeps, contact)) {
                   out.push_back(contact);
                 }
               }
@@ -557,7 +567,7 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
       }
       const bool was_crossed = c.crossed;
       const vec3 side = c.move;
-      if (!test_pair(ctx, c.first, c.second, c)) {
+      if (!test_pair(ctx, c.first, c.second, 0.0f, c)) {
         continue;
       }
       if (was_crossed && glm::dot(c.core.point_b - c.core.point_a, side) < 0.0f) {

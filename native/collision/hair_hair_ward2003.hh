@@ -48,6 +48,7 @@ struct SegmentGridScratch {
   std::vector<int32_t> point_curve; /* per point: its strand */
   /* Per segment (segment k of strand c starts at point k + c). */
   std::vector<int32_t> segment_curve;
+  std::vector<float> segment_sweep; /* m, the farthest one of its nodes moved in the substep */
   std::vector<vec3> box_min, box_max; /* its swept LSS's bounding box, start and end */
   std::vector<ivec3> cell_min, cell_max;
   std::vector<int32_t> entry_offsets; /* its first grid entry */
