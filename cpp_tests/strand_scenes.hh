@@ -15,10 +15,12 @@ struct Groom {
   std::vector<int32_t> offsets{ 0 };
   std::vector<vec3> positions;
 
-  void add_straight(const vec3 &root, const vec3 &direction, const float length, const int segments)
+  void add_straight(const vec3 &root, const vec3 &direction, const float length,
+                    const int segments)
   {
     for (int i = 0; i <= segments; i++) {
-      positions.push_back(root + glm::normalize(direction) * (length * float(i) / float(segments)));
+      positions.push_back(root +
+                          glm::normalize(direction) * (length * float(i) / float(segments)));
     }
     offsets.push_back(int32_t(positions.size()));
   }
@@ -52,7 +54,6 @@ inline mat4 swaying_head(const int frame, const float yaw_rate, const float slid
       0.6f * std::sin(yaw_rate * t), vec3(0.0f, 0.0f, 1.0f));
 }
 
-
 /* Closest points of segments [a0, a1] and [b0, b1]: parameters s, u in [0, 1]. */
 inline void closest_parameters(const vec3 &a0, const vec3 &a1, const vec3 &b0, const vec3 &b1,
                                float &r_s, float &r_u)
@@ -61,7 +62,8 @@ inline void closest_parameters(const vec3 &a0, const vec3 &a1, const vec3 &b0, c
   const float aa = glm::dot(da, da), bb = glm::dot(db, db), ab = glm::dot(da, db);
   const float ar = glm::dot(da, r), br = glm::dot(db, r);
   const float denominator = aa * bb - ab * ab;
-  float s = denominator > 1e-12f ? glm::clamp((ab * br - bb * ar) / denominator, 0.0f, 1.0f) : 0.0f;
+  float s =
+      denominator > 1e-12f ? glm::clamp((ab * br - bb * ar) / denominator, 0.0f, 1.0f) : 0.0f;
   float u = glm::clamp((ab * s + br) / bb, 0.0f, 1.0f);
   s = glm::clamp((ab * u - ar) / aa, 0.0f, 1.0f);
   r_s = s;
@@ -77,7 +79,8 @@ inline int64_t count_sheet_crossings(const Groom &groom, const int64_t split,
                                      const std::vector<vec3> &before,
                                      const std::vector<vec3> &after, const float reach)
 {
-  const auto side = [&](const std::vector<vec3> &x, const int64_t a, const int64_t b, float &r_side) {
+  const auto side = [&](const std::vector<vec3> &x, const int64_t a, const int64_t b,
+                        float &r_side) {
     float s, u;
     closest_parameters(x[a], x[a + 1], x[b], x[b + 1], s, u);
     if (s <= 0.0f || s >= 1.0f || u <= 0.0f || u >= 1.0f) {
@@ -137,7 +140,8 @@ inline Groom crossing_sheets_groom(const StrandModel model, const CrossingSheets
   const int n = scene.strands_per_sheet;
   const float half = 0.5f * scene.spacing * float(n - 1);
   for (int i = 0; i < n; i++) {
-    groom.add_straight(vec3(0.0f, -half + scene.spacing * float(i), 0.0f), vec3(1, 0, 0), 0.2f, 10);
+    groom.add_straight(vec3(0.0f, -half + scene.spacing * float(i), 0.0f), vec3(1, 0, 0), 0.2f,
+                       10);
   }
   /* Lines from (plane_x, -half - 0.045 + spacing i, 0.03) along (0, 1, -1), rooted at their
    * upper end (Kurihara) or their lower end (articulated). */
@@ -170,10 +174,12 @@ inline SheetsResult run_crossing_sheets(const StrandModel model, SubstepPass *pa
     solver.step(1.0f / 100.0f, mat4(1.0f));
     result.diverged += solver.diverged_num();
     const std::vector<vec3> after(solver.positions().begin(), solver.positions().end());
-    result.crossings += count_sheet_crossings(groom, scene.strands_per_sheet, before, after, 0.02f);
+    result.crossings +=
+        count_sheet_crossings(groom, scene.strands_per_sheet, before, after, 0.02f);
     for (size_t c = 0; c + 1 < groom.offsets.size(); c++) {
       for (int32_t p = groom.offsets[c] + 1; p < groom.offsets[c + 1]; p++) {
-        const float rest = glm::length(groom.positions[size_t(p)] - groom.positions[size_t(p - 1)]);
+        const float rest =
+            glm::length(groom.positions[size_t(p)] - groom.positions[size_t(p - 1)]);
         const float length = glm::length(after[size_t(p)] - after[size_t(p - 1)]);
         result.worst_stretch = std::max(result.worst_stretch, std::abs(length - rest) / rest);
       }
