@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "strand_scenes.hh"
 #include "strands/strand_solver.hh"
 #include "volume/volume_pass.hh"
 
@@ -13,125 +14,24 @@ using namespace hairdyn;
 
 namespace {
 
-struct Groom {
-  std::vector<int32_t> offsets{0};
-  std::vector<vec3> positions;
+using strand_scenes::Groom;
 
-  void add_straight(const vec3 &root, const vec3 &direction, const float length, const int segments)
-  {
-    for (int i = 0; i <= segments; i++) {
-      positions.push_back(root + glm::normalize(direction) * (length * float(i) / float(segments)));
-    }
-    offsets.push_back(int32_t(positions.size()));
-  }
-};
-
-/* Closest points of segments [a0, a1] and [b0, b1]: parameters s, u in [0, 1]. */
-void closest_parameters(const vec3 &a0, const vec3 &a1, const vec3 &b0, const vec3 &b1,
-                        float &r_s, float &r_u)
-{
-  const vec3 da = a1 - a0, db = b1 - b0, r = a0 - b0;
-  const float aa = glm::dot(da, da), bb = glm::dot(db, db), ab = glm::dot(da, db);
-  const float ar = glm::dot(da, r), br = glm::dot(db, r);
-  const float denominator = aa * bb - ab * ab;
-  float s = denominator > 1e-12f ? glm::clamp((ab * br - bb * ar) / denominator, 0.0f, 1.0f) : 0.0f;
-  float u = glm::clamp((ab * s + br) / bb, 0.0f, 1.0f);
-  s = glm::clamp((ab * u - ar) / aa, 0.0f, 1.0f);
-  r_s = s;
-  r_u = u;
-}
-
-/* Pairs of segments, one of sheet A (strands [0, split)) and one of sheet B (the rest), that
- * pass through each other between two states: at both states their closest points lie inside
- * both segments, less than `reach` apart, and the side of segment b on which segment a lies
- * (the sign of (a − b) · (da × db) at the closest points) flips. A geometric count, independent
- * of the solver. */
-int64_t count_crossings(const Groom &groom, const int64_t split, const std::vector<vec3> &before,
-                        const std::vector<vec3> &after, const float reach)
-{
-  const auto side = [&](const std::vector<vec3> &x, const int64_t a, const int64_t b, float &r_side) {
-    float s, u;
-    closest_parameters(x[a], x[a + 1], x[b], x[b + 1], s, u);
-    if (s <= 0.0f || s >= 1.0f || u <= 0.0f || u >= 1.0f) {
-      return false;
-    }
-    const vec3 gap = glm::mix(x[a], x[a + 1], s) - glm::mix(x[b], x[b + 1], u);
-    if (glm::length(gap) > reach) {
-      return false;
-    }
-    r_side = glm::dot(gap, glm::cross(x[a + 1] - x[a], x[b + 1] - x[b]));
-    return true;
-  };
-  int64_t crossings = 0;
-  const int64_t curves_num = int64_t(groom.offsets.size()) - 1;
-  for (int64_t ca = 0; ca < split; ca++) {
-    for (int64_t a = groom.offsets[ca]; a < groom.offsets[ca + 1] - 1; a++) {
-      for (int64_t cb = split; cb < curves_num; cb++) {
-        for (int64_t b = groom.offsets[cb]; b < groom.offsets[cb + 1] - 1; b++) {
-          float side_before, side_after;
-          if (side(before, a, b, side_before) && side(after, a, b, side_after) &&
-              (side_before > 0.0f) != (side_after > 0.0f))
-          {
-            crossings++;
-          }
-        }
-      }
-    }
-  }
-  return crossings;
-}
-
-/* Fig. 4's situation: two sheets of strands pass through each other. Sheet A, horizontal
- * strands along +x, falls under gravity through sheet B, strands at 45° in the plane
- * x = 6 cm. Both sheets are limp: in Kurihara's model near-zero hinge springs, in the
- * articulated model human hair (the default material; Γ ≈ 70 for these 20 cm strands).
- * In Kurihara's model B hangs from its upper end and A sweeps through it; two articulated
- * sheets hanging from above sag together and hardly pass through each other, so there B
- * stands from roots 14 cm lower and falls over through A. Returns the crossings over
- * `frames` frames with velocity smoothing of strength s (0: no pass). */
+/* Fig. 4's two sheets (strand_scenes::run_crossing_sheets) with velocity smoothing of strength
+ * s (0: no pass): the crossings over the frames and how far sheet A's tips fell. */
 int64_t sheets_crossings(const StrandModel model, const float smoothing, const int frames,
                          float &r_tip_drop)
 {
-  Groom groom;
-  const int strands_per_sheet = 12;
-  for (int i = 0; i < strands_per_sheet; i++) {
-    groom.add_straight(vec3(0.0f, -0.055f + 0.01f * float(i), 0.0f), vec3(1, 0, 0), 0.2f, 10);
-  }
-  /* The lines from (0.06, -0.1 + 0.01 i, 0.03) along (0, 1, -1), rooted at their upper end
-   * (Kurihara) or their lower end (articulated). */
-  const vec3 down = 0.2f * glm::normalize(vec3(0, 1, -1));
-  const bool from_below = model == StrandModel::Articulated;
-  for (int i = 0; i < strands_per_sheet; i++) {
-    const vec3 top(0.06f, -0.1f + 0.01f * float(i), 0.03f);
-    groom.add_straight(from_below ? top + down : top, from_below ? -down : down, 0.2f, 10);
-  }
-  StrandParams params;
-  params.model = model;
-  params.k_theta = params.k_phi = 1e-9f; /* Kurihara: limp */
-  params.damping = 1e-11f;
-  params.substeps = 4;
-  StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), {}, params);
   VolumeParams volume_params;
   volume_params.smoothing = smoothing;
   volume_params.cell_size = 0.015f;
   VolumePass volume(volume_params);
-  if (smoothing > 0.0f) {
-    solver.add_pass(&volume);
-  }
-  int64_t crossings = 0;
-  std::vector<vec3> before(solver.positions().begin(), solver.positions().end());
-  for (int frame = 0; frame < frames; frame++) {
-    solver.step(1.0f / 100.0f, mat4(1.0f));
-    EXPECT_EQ(solver.diverged_num(), 0);
-    const std::vector<vec3> after(solver.positions().begin(), solver.positions().end());
-    crossings += count_crossings(groom, strands_per_sheet, before, after, 0.02f);
-    before = after;
-  }
-  r_tip_drop = 0.0f;
-  for (int i = 0; i < strands_per_sheet; i++) {
-    r_tip_drop -= before[size_t(groom.offsets[i + 1] - 1)].z / float(strands_per_sheet);
-  }
-  return crossings;
+  strand_scenes::CrossingSheets scene;
+  scene.frames = frames;
+  const strand_scenes::SheetsResult result = strand_scenes::run_crossing_sheets(
+      model, smoothing > 0.0f ? &volume : nullptr, scene);
+  EXPECT_EQ(result.diverged, 0);
+  r_tip_drop = result.tip_drop;
+  return result.crossings;
 }
 
 }  // namespace

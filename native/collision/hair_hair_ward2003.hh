@@ -29,48 +29,60 @@
 
 namespace hairdyn {
 
-/* Two intersecting segments, each named by its first point (the segment runs to the next). */
+/* Two segments in contact, each named by its first point (the segment runs to the next), and
+ * the response §5.3 gives them (applied by resolve_hair_hair, averaged per node). */
 struct SegmentContact {
   int32_t first = 0;  /* the smaller point index */
   int32_t second = 0;
-  CoreDistance core;  /* point_a on `first`, point_b on `second` */
-  float overlap = 0.0f; /* core.distance − r1 − r2 (< 0) */
+  CoreDistance core;    /* at the end of the substep: point_a on `first`, point_b on `second` */
+  float overlap = 0.0f; /* core.distance − r1 − r2 (< 0); for a pair that passed through each
+                         * other during the substep, minus the distance they must move apart */
+  bool crossed = false; /* they passed through each other during the substep */
+  bool parallel = false; /* near parallel: velocities averaged, not pushed */
+  vec3 move{0.0f};      /* `second`'s closest point moves by this, `first`'s by minus it */
+  vec3 dv_first{0.0f}, dv_second{0.0f}; /* the closest points' velocity changes */
 };
 
-/* Reusable buffers of the segment grid. */
+/* Reusable buffers of the segment grid (no allocation once they have grown). */
 struct SegmentGridScratch {
-  std::vector<int32_t> point_curve;      /* per point: its strand */
-  /* Per segment, together for the pair loop's memory accesses. */
-  struct Segment {
-    vec3 box_min, box_max; /* its LSS's bounding box (relative to the groom's lower corner) */
-    ivec3 cell_min;        /* the first cell it touches */
-    int32_t point;         /* its first point */
-    int32_t curve;
-    float radius;
+  std::vector<int32_t> point_curve; /* per point: its strand */
+  /* Per segment (segment k of strand c starts at point k + c). */
+  std::vector<int32_t> segment_curve;
+  std::vector<float> segment_sweep; /* m, the farthest one of its nodes moved in the substep */
+  std::vector<vec3> box_min, box_max; /* its swept LSS's bounding box, start and end */
+  std::vector<ivec3> cell_min, cell_max;
+  std::vector<int32_t> entry_offsets; /* its first grid entry */
+  /* The grid entries, cell by cell (cells in linear order), within a cell by box_min.x. */
+  struct Entry {
+    float min_x, max_x, min_y, max_y, min_z, max_z; /* the segment's box */
+    int32_t point;                                 /* its first point */
+    uint32_t curve_flags; /* strand << 3 | bit a set when this cell is its first along axis a */
   };
-  std::vector<Segment> segments;
-  std::vector<int64_t> entry_offsets;    /* per segment: its first grid entry */
-  std::vector<ivec3> entry_cells;        /* per entry: the cell */
-  std::vector<uint32_t> bucket_offsets;  /* counting sort by hashed cell */
-  std::vector<int32_t> sorted_entries;   /* segment index per entry, bucket by bucket */
-  std::vector<ivec3> sorted_cells;
-  std::vector<float> sorted_min_x, sorted_max_x; /* per entry: its box's x range */
-  std::vector<uint32_t> fill;
+  std::vector<Entry> entries;
+  std::vector<uint32_t> entry_keys;   /* per entry in segment order: its cell's linear index */
+  std::vector<uint32_t> cell_offsets; /* per cell: its first entry */
+  std::vector<uint32_t> chunk_counts; /* counting sort: per chunk of segments and cell */
   std::vector<std::vector<SegmentContact>> chunk_contacts;
   /* The response's per-node sums of corrections and of their weights. */
-  std::vector<vec3> dx, dv;
-  std::vector<float> wx, wv;
+  std::vector<vec4> dx, dv; /* xyz: the sum, w: the weight */
   float cell_size = 0.0f;
-  int64_t candidate_pairs_num = 0; /* pairs sharing a cell whose boxes overlap along x */
+  int64_t candidate_pairs_num = 0; /* pairs sharing a cell whose boxes overlap */
 };
 
-/* Every pair of segments whose LSSs intersect (overlap < 0), but a strand's neighbouring
- * segments, sorted by (first, second). Radii per point (a segment takes the mean of its two
- * nodes'), or empty for default_radius everywhere. With `different_strands_only`, pairs of
- * one strand are left out too. */
+/* Every pair of segments whose LSSs intersect at `positions` (overlap < 0), but a strand's
+ * neighbouring segments, in a fixed order that does not depend on the thread count. Radii per
+ * point (a segment takes the mean of its two nodes'), or empty for default_radius everywhere.
+ * With `different_strands_only`, pairs of one strand are left out too. With
+ * `start_positions` (the nodes at the substep's start), also the pairs that passed through
+ * each other on the way (continuous detection: each segment sweeps linearly from its start;
+ * without them but with `params`, from x − h v).
+ * The contacts carry §5.3's response computed from `velocities` (may be empty when `params`
+ * is null; then no response is computed). */
 void find_segment_contacts(Span<int32_t> curve_offsets, Span<vec3> positions, Span<float> radii,
                            float default_radius, bool different_strands_only,
-                           SegmentGridScratch &scratch, std::vector<SegmentContact> &r_contacts);
+                           SegmentGridScratch &scratch, std::vector<SegmentContact> &r_contacts,
+                           Span<vec3> start_positions = {}, Span<vec3> velocities = {},
+                           const SweptSphereParams *params = nullptr, float h = 0.0f);
 
 /* Segment pairs of different strands closer than the sum of their radii: the `crossings`
  * report of a frame. */
@@ -81,13 +93,15 @@ struct HairHairStats {
   int64_t pairs_num = 0;       /* intersecting pairs found (hair_hair_pairs) */
   int64_t pushed_num = 0;      /* pairs pushed apart */
   int64_t averaged_num = 0;    /* near-parallel pairs whose velocities were averaged */
+  int64_t crossed_num = 0;     /* pairs that had passed through each other in the substep */
   int64_t candidates_num = 0;  /* pairs sharing a grid cell */
   double ms = 0.0;             /* time spent in apply() */
 };
 
 /* §5.3's response over the node state: positions and velocities corrected in place (roots
- * untouched). Velocities at the substep's start are taken as the state's (x − h v for the
- * previous positions). Returns the statistics of this call. */
+ * untouched). The state's start_positions_wo, when given, let it catch segments that passed
+ * through each other within the substep; without them the previous positions are taken as
+ * x − h v. Returns the statistics of this call. */
 HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepState &state,
                                 SegmentGridScratch &scratch,
                                 std::vector<SegmentContact> &contacts_scratch);

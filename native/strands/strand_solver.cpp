@@ -480,6 +480,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     for_each_curve([&](const int64_t curve, Counts &) { prepare_strand(curve, substeps[0].h); });
     std::vector<uint8_t> diverged(size_t(curves_num()), 0);
     for (const Substep &substep : substeps) {
+      positions_start_ = positions_wo_;
       for_each_curve([&](const int64_t curve, Counts &chunk) {
         if (!diverged[size_t(curve)] && !advance_strand(curve, substep, chunk)) {
           diverged[size_t(curve)] = 1;
@@ -493,6 +494,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
       state.curve_offsets = curve_offsets_;
       state.positions_wo = positions_wo_;
       state.velocities_wo = velocities_wo_;
+      state.start_positions_wo = positions_start_;
       state.head_to_world = pose_matrix(substep.pose);
       for (size_t p = 0; p < passes_.size(); p++) {
         const auto start = std::chrono::steady_clock::now();

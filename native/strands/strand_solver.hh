@@ -288,6 +288,7 @@ class StrandSolver {
   std::vector<SubstepPass *> passes_;
   std::vector<vec3> positions_before_; /* the nodes before the passes of a substep */
   std::vector<vec3> velocities_before_;
+  std::vector<vec3> positions_start_; /* the nodes at the start of a substep (with passes) */
   std::vector<double> pass_ms_;
 
   /* The head at the end of the last step, and its velocity over that step. */

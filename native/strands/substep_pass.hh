@@ -23,6 +23,10 @@ struct SubstepState {
    * may change any node but the roots (the first point of each strand). */
   MutableSpan<vec3> positions_wo;
   MutableSpan<vec3> velocities_wo;
+  /* World-space node positions at the substep's start (as the last substep's passes and
+   * take-back left them), or empty when the caller has none: a collision pass sweeps each
+   * segment from there to positions_wo (continuous detection). */
+  Span<vec3> start_positions_wo;
   /* m, per point: the strand's radius (swept-sphere thickness); empty when unknown. */
   Span<float> radii;
   /* The head at the end of the substep (grids that move with the head use it). */
