@@ -3,6 +3,7 @@
  * roots carried by the head, and a diverging strand never hands out NaN. */
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <memory>
 
@@ -82,7 +83,52 @@ class KickPass : public SubstepPass {
   bool done_ = false;
 };
 
+/* At its first substep, makes strand 0's tip velocity not a number (the strand diverges);
+ * at every substep, moves every node but the roots 1 cm along +X, as a pass may. */
+class PoisonThenShovePass : public SubstepPass {
+ public:
+  const char *name() const override { return "poison"; }
+  void apply(const SubstepState &state) override
+  {
+    if (calls++ == 0) {
+      state.velocities_wo[state.curve_offsets[1] - 1].x = std::nanf("");
+    }
+    for (int64_t curve = 0; curve + 1 < state.curve_offsets.size(); curve++) {
+      for (int32_t i = state.curve_offsets[curve] + 1; i < state.curve_offsets[curve + 1]; i++) {
+        state.positions_wo[i].x += 0.01f;
+      }
+    }
+  }
+  int calls = 0;
+};
+
 }  // namespace
+
+/* A strand that diverged in a substep stays on its rest shape, carried by the head, through
+ * the frame's later substeps: the passes' moves of its nodes don't stretch it. */
+TEST(StrandsPasses, ADivergedStrandKeepsItsRestShapeWhateverThePassesDo)
+{
+  const Groom groom = wavy_groom(2);
+  StrandParams params;
+  params.substeps = 4;
+  for (const StrandModel model : { StrandModel::Articulated, StrandModel::Kurihara1993 }) {
+    SCOPED_TRACE(model == StrandModel::Articulated ? "articulated" : "kurihara1993");
+    params.model = model;
+    StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), {}, params);
+    PoisonThenShovePass pass;
+    solver.add_pass(&pass);
+    const mat4 head = swaying_head(1);
+    solver.step(1.0f / 24.0f, head);
+    EXPECT_EQ(solver.diverged_num(), 1);
+    EXPECT_EQ(pass.calls, 4);
+    const Span<vec3> positions = solver.positions();
+    for (int32_t i = groom.offsets[0]; i < groom.offsets[1]; i++) {
+      const vec3 rest = transform_point(head, groom.positions[size_t(i)]);
+      EXPECT_LT(glm::length(positions[i] - rest), 1e-5f) << "node " << i;
+    }
+    EXPECT_LT(max_relative_stretch(groom.offsets, groom.positions, solver.positions()), 1e-5f);
+  }
+}
 
 TEST(StrandsPasses, AVelocityCorrectionComesBackAsThatVelocity)
 {

@@ -481,8 +481,13 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     std::vector<uint8_t> diverged(size_t(curves_num()), 0);
     for (const Substep &substep : substeps) {
       positions_start_ = positions_wo_;
+      /* A strand that diverged stays on its rest shape, carried by the head, whatever the
+       * passes do to its nodes, until the frame ends (the next frame starts it from there). */
       for_each_curve([&](const int64_t curve, Counts &chunk) {
-        if (!diverged[size_t(curve)] && !advance_strand(curve, substep, chunk)) {
+        if (diverged[size_t(curve)]) {
+          place_at_rest(curve, substep.pose);
+        }
+        else if (!advance_strand(curve, substep, chunk)) {
           diverged[size_t(curve)] = 1;
         }
       });
@@ -504,7 +509,10 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
                            .count();
       }
       for_each_curve([&](const int64_t curve, Counts &chunk) {
-        if (!diverged[size_t(curve)] && !settle_strand(curve, substep, chunk)) {
+        if (diverged[size_t(curve)]) {
+          place_at_rest(curve, substep.pose);
+        }
+        else if (!settle_strand(curve, substep, chunk)) {
           diverged[size_t(curve)] = 1;
         }
       });
