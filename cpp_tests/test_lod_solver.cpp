@@ -37,9 +37,9 @@ struct Scene {
   LodSolver solver;
 
   explicit Scene(const LodParams &params, const WindParams &wind = WindParams(),
-                 const int strands_num = 300)
+                 const int strands_num = 300, const StrandParams &strand_params = StrandParams())
       : groom(strands_num, 10),
-        solver(groom.offsets, groom.positions, {}, groom.normals, head, StrandParams(), wind,
+        solver(groom.offsets, groom.positions, {}, groom.normals, head, strand_params, wind,
                params)
   {
     solver.set_colliders(colliders.get(), CollisionParams());
@@ -317,16 +317,23 @@ TEST(LodSolver, NoJumpAtATransition)
    *
    * At the frame of the first split the output must equal the unsplit simulation's to
    * rounding (the old skeleton still drives it, the jump is held in the residual); then the
-   * spring may add at most (1 - exp(-dt / transition_time)) of the raw jump per frame. */
+   * spring may add at most (1 - exp(-dt / transition_time)) of the raw jump per frame.
+   *
+   * The bound takes the unsplit simulation's motion for the split one's own; that holds while
+   * the wind is gentle. With form drag (StrandParams::form_drag) a 3 m/s wind pushes about
+   * three times as hard, the finer skeletons' own motion outgrows the unsplit one's, and the
+   * bound no longer separates the transition from the motion: linear drag only here. */
   WindParams wind;
   wind.speed = 3.0f;
   wind.turbulence = 0.5f;
+  StrandParams strand_params;
+  strand_params.form_drag = 0.0f;
   float raw_jump = 0.0f;
   for (const float transition_time : {0.0f, 0.25f}) {
     LodParams params = scene_params();
     params.transition_time = transition_time;
-    Scene scene(params, wind);
-    Scene unsplit(params, wind);
+    Scene scene(params, wind, 300, strand_params);
+    Scene unsplit(params, wind, 300, strand_params);
     std::vector<vec3> previous, unsplit_previous;
     float jump = 0.0f, motion = 0.0f;
     int64_t splits = 0;

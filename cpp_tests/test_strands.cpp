@@ -91,6 +91,7 @@ StrandParams quiet_params()
   StrandParams params = kurihara_params();
   params.gravity = vec3(0.0f);
   params.air_drag = 0.0f;
+  params.form_drag = 0.0f;
   params.damping = 0.0f;
   params.k_theta = 0.0f;
   params.k_phi = 0.0f;

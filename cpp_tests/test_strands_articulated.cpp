@@ -202,6 +202,7 @@ StrandParams chain_params()
   params.youngs_modulus = 1e3f;
   params.bending_damping = 0.0f;
   params.air_drag = 0.0f;
+  params.form_drag = 0.0f;
   return params;
 }
 
@@ -381,6 +382,7 @@ TEST(StrandsArticulated, EnergyNeverIncreasesWithDampingAndNoDriving)
     StrandParams params = material_for_gamma(4.0, 0.3);
     params.gravity = vec3(0.0f, 0.0f, -g);
     params.air_drag = 0.0f;
+    params.form_drag = 0.0f;
     params.bending_damping = 0.01f;
     params.substeps = 4;
     StrandSolver solver(strand.offsets, strand.positions, mat4(1.0f), strand.normals, params);
@@ -530,41 +532,47 @@ TEST(StrandsArticulated, AChainTurningThroughTheChartsPolesKeepsItsEnergy)
    * inertia about a segment's own axis, φ̇ grew without bound there and the chain ran away
    * within a tenth of a second.
    *
-   * The energy drifts by the scheme's first-order error (the velocity products are explicit):
-   * measured at the end, +67% at 128 substeps, +26% at 512 and +7% at 2048, shrinking with
-   * the step as it should (the bound below is for 512; the runaway went without bound). */
+   * With the velocity products at the start of the step (explicit Euler) the energy grew in
+   * proportion to the step: +67% at 128 substeps, +26% at 512, +7% at 2048 by the end. At
+   * mid-step (the model's explicit midpoint) it ends within 6% at every one of them; what is
+   * left does not shrink with the step (the node velocities measure it, and the chain's spin
+   * about its own axes, see axial_inertia_share, is not in them). */
   std::vector<int32_t> offsets{ 0, 13 };
   std::vector<vec3> positions;
   for (int i = 0; i <= 12; i++) {
     positions.push_back(vec3(0.0f, 0.0f, -0.0125f * float(i)));
   }
-  StrandParams params = articulated();
-  params.youngs_modulus = 1e-3f; /* limp: no bending energy to speak of */
-  params.bending_damping = 0.0f;
-  params.gravity = vec3(0.0f);
-  params.air_drag = 0.0f;
-  params.substeps = 512;
-  StrandSolver solver(offsets, positions, mat4(1.0f), {}, params);
-  uint32_t seed = 7;
-  const auto uniform = [&]() {
-    seed = seed * 1664525u + 1013904223u;
-    return float(seed >> 8) / float(1 << 24) - 0.5f;
-  };
-  for (int64_t i = 1; i <= 12; i++) {
-    const float a = uniform(), b = uniform();
-    solver.angular_velocities_for_write()[i] = 100.0f * vec2(a, b);
-    solver.angles_for_write()[i] = vec2(b, a);
-  }
-  solver.step(1.0f / 240.0f, mat4(1.0f));
-  const double start = chain_energy(solver, 0.0f);
-  float widest = 0.0f;
-  for (int frame = 1; frame < 48; frame++) {
-    solver.step(1.0f / 240.0f, mat4(1.0f));
-    ASSERT_EQ(solver.diverged_num(), 0) << "frame " << frame;
-    for (const vec2 &q : solver.angles()) {
-      widest = std::max(widest, std::abs(q.x));
+  for (const int substeps : {128, 512}) {
+    SCOPED_TRACE(substeps);
+    StrandParams params = articulated();
+    params.youngs_modulus = 1e-3f; /* limp: no bending energy to speak of */
+    params.bending_damping = 0.0f;
+    params.gravity = vec3(0.0f);
+    params.air_drag = 0.0f;
+    params.form_drag = 0.0f;
+    params.substeps = substeps;
+    StrandSolver solver(offsets, positions, mat4(1.0f), {}, params);
+    uint32_t seed = 7;
+    const auto uniform = [&]() {
+      seed = seed * 1664525u + 1013904223u;
+      return float(seed >> 8) / float(1 << 24) - 0.5f;
+    };
+    for (int64_t i = 1; i <= 12; i++) {
+      const float a = uniform(), b = uniform();
+      solver.angular_velocities_for_write()[i] = 100.0f * vec2(a, b);
+      solver.angles_for_write()[i] = vec2(b, a);
     }
+    solver.step(1.0f / 240.0f, mat4(1.0f));
+    const double start = chain_energy(solver, 0.0f);
+    float widest = 0.0f;
+    for (int frame = 1; frame < 48; frame++) {
+      solver.step(1.0f / 240.0f, mat4(1.0f));
+      ASSERT_EQ(solver.diverged_num(), 0) << "frame " << frame;
+      for (const vec2 &q : solver.angles()) {
+        widest = std::max(widest, std::abs(q.x));
+      }
+    }
+    EXPECT_GT(widest, float(M_PI_2)) << "no hinge reached the pole";
+    EXPECT_NEAR(chain_energy(solver, 0.0f), start, 0.1 * start);
   }
-  EXPECT_GT(widest, float(M_PI_2)) << "no hinge reached the pole";
-  EXPECT_NEAR(chain_energy(solver, 0.0f), start, 0.3 * start);
 }

@@ -152,6 +152,7 @@ TEST(StrandsPasses, AVelocityCorrectionComesBackAsThatVelocity)
     params.damping = 0.0f;
     params.gravity = vec3(0.0f);
     params.air_drag = 0.0f;
+    params.form_drag = 0.0f;
     params.substeps = 1;
     StrandSolver solver(offsets, positions, mat4(1.0f), {}, params);
     KickPass kick(delta_v);

@@ -99,18 +99,30 @@ Soak soak(const StrandModel model)
  * frames (the head turns at up to 35 rad/s); segments keep their length; no node leaves the
  * reach of its root (head radius plus strand length); collision keeps the nodes out of the
  * head (within 5 mm: the 40 × 40 maps resolve the sphere to about 1 cm); once the head stops
- * the hair comes to rest. The default strand model (kurihara1993): the articulated model
- * does not survive this shake yet (strands diverge within 6 frames, issue 12). */
+ * the hair comes to rest. Both strand models. The articulated model survives it since its
+ * velocity products are taken at mid-step, contacts stop a tip by an impulse through the
+ * chain's inertia, and the air's form drag acts on a whipped tip (issue 12; before, strands
+ * diverged within 6 frames). It does not come to rest: where a strand lies on the head, its
+ * projected segment alternates between two places a fraction of a millimetre apart, and the
+ * tips beyond it keep swinging by a few millimetres a substep (0.28 m/s); that resting
+ * contact is an open defect of the articulated model (issue 12), checked here only for
+ * kurihara1993. */
 TEST(StrandsRobustness, SurviveFiveHundredFramesOfViolentShake)
 {
-  const Soak result = soak(StrandModel::Kurihara1993);
-  std::printf("reach %.4f m, depth %.4f m, stretch %.2e, peak speed %.2f m/s, speed 48 frames "
-              "after the shake %.4f m/s\n",
-              result.max_reach, result.max_depth, result.max_stretch, result.peak_speed,
-              result.speed_after);
-  EXPECT_GT(result.peak_speed, 1.0f) << "the shake must fling the hair";
-  EXPECT_LE(result.max_reach, head_radius * 1.01f + strand_length + 1e-3f);
-  EXPECT_LE(result.max_stretch, 1e-4f);
-  EXPECT_LE(result.max_depth, 0.005f);
-  EXPECT_LT(result.speed_after, 0.1f);
+  for (const StrandModel model : {StrandModel::Kurihara1993, StrandModel::Articulated}) {
+    SCOPED_TRACE(model == StrandModel::Articulated ? "articulated" : "kurihara1993");
+    const Soak result = soak(model);
+    std::printf("%s: reach %.4f m, depth %.4f m, stretch %.2e, peak speed %.2f m/s, speed 48 "
+                "frames after the shake %.4f m/s\n",
+                model == StrandModel::Articulated ? "articulated" : "kurihara1993",
+                result.max_reach, result.max_depth, result.max_stretch, result.peak_speed,
+                result.speed_after);
+    EXPECT_GT(result.peak_speed, 1.0f) << "the shake must fling the hair";
+    EXPECT_LE(result.max_reach, head_radius * 1.01f + strand_length + 1e-3f);
+    EXPECT_LE(result.max_stretch, 1e-4f);
+    EXPECT_LE(result.max_depth, 0.005f);
+    if (model == StrandModel::Kurihara1993) {
+      EXPECT_LT(result.speed_after, 0.1f);
+    }
+  }
 }

@@ -26,8 +26,21 @@
  *   (M + h γ + h² k) Δq̇ = h (τ_ext − bias − k q − (γ + h k) q̇),
  * and since k and γ act on one hinge each, h γ + h² k simply adds to the hinge's joint-space
  * inertia D_i (the "armature" of Featherstone §7.3): still one O(N) pass, unconditionally
- * stable in the springs and damping. Gravity, drag, head forces and the velocity products
- * stay explicit. */
+ * stable in the springs and damping.
+ *
+ * Gravity, drag, head forces and the velocity products are explicit, taken at the middle of
+ * the step (explicit midpoint): a predictor pass gives q̈₀, and the step itself takes them at
+ * the rates q̇ + h q̈₀ / 2. Taken at q̇ (explicit Euler), they let a tumbling chain gain energy
+ * in proportion to the step (a free chain at 50 rad/s: +67%, +26%, +7% in 0.2 s at 128, 512
+ * and 2048 substeps), and a strand whipped by a violent head shake, whose segments turn at
+ * thousands of rad/s, ran away within a few frames.
+ *
+ * Contact: a segment whose tip ends a step inside a body turns about its root onto the
+ * surface (Ward & Lin 2003 §5.5), and the tip's velocity into the surface is stopped by an
+ * inelastic impulse through the chain's articulated inertia (stop_at_contact). That never
+ * adds energy; stopping the one hinge instead (Kurihara 1993's hinges, where each segment
+ * moves on its own) changes the generalised momentum of everything distal to it, and fed a
+ * whipping chain energy until it ran away. */
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -63,6 +76,7 @@ inline rmat3 cross_matrix(const rvec3 &v)
 struct Body {
   rvec3 s_theta, s_phi;      /* the hinge's axes: q̇ turns the body by θ̇ s_θ + φ̇ s_φ */
   rvec3 arm;                 /* r, from the parent's hinge point to this one */
+  rvec3 reach;               /* d t, from this hinge point to the segment's tip */
   rvec3 bias_angular;        /* velocity-product accelerations across the hinge (c_i) */
   rvec3 bias_linear;
   rmat3 a, b, c;             /* articulated inertia at P_i, blocks [a b; bᵀ c] */
@@ -83,11 +97,72 @@ struct Body {
 constexpr float axial_inertia_share = 1.0f;
 
 thread_local std::vector<Body> bodies;
+thread_local std::vector<vec2> mid_accelerations; /* q̈₀ of the predictor, per body */
 thread_local std::vector<vec3> substep_start; /* a strand's nodes where a cut substep began */
 
 inline rmat3 outer(const rvec3 &x, const rvec3 &y)
 {
   return rmat3(x * y.x, x * y.y, x * y.z); /* x yᵀ, column-major */
+}
+
+/* The inelastic contact at the tip of body `hit`: if the tip moves into the surface of
+ * outward normal n (relative to the head, from the hinge rates and the step's geometry), the
+ * impulse λ n with λ = −v_n / (n · Δv(n)) stops that motion, Δv(n) being the tip's velocity
+ * change per unit impulse. The impulse's effect on every rate is Featherstone's articulated-
+ * body recursion with the impulse as the only force (Table 7.1 without velocity products or
+ * hinge torques; D and U are the step's, springs' armature included): tip to root, the
+ * impulse's bias p^A = (−reach × n, −n) at `hit` and its share p^a = p^A + U D⁻¹ u, u = −Sᵀ p^A,
+ * handed to the parents; root to tip, Δq̇ = D⁻¹ (u − Uᵀ a'). The kinetic energy changes by
+ * −v_n² / (2 n · Δv(n)) ≤ 0. */
+void stop_at_contact(const Span<Body> chain, const size_t hit, const rvec3 &n,
+                     const MutableSpan<vec2> rates)
+{
+  /* The tip's velocity: Ω_k = Ω_{k-1} + S_k q̇_k, v(P_k) = v(P_{k-1}) + Ω_{k-1} × r_k. */
+  rvec3 omega(0.0), v(0.0);
+  for (size_t k = 0; k <= hit; k++) {
+    v += glm::cross(omega, chain[int64_t(k)].arm);
+    omega += double(rates[int64_t(k)].x) * chain[int64_t(k)].s_theta +
+             double(rates[int64_t(k)].y) * chain[int64_t(k)].s_phi;
+  }
+  const double approach = glm::dot(n, v + glm::cross(omega, chain[int64_t(hit)].reach));
+  if (!(approach < 0.0)) {
+    return;
+  }
+  thread_local std::vector<rvec2> u;
+  thread_local std::vector<rvec2> delta;
+  u.assign(hit + 1, rvec2(0.0));
+  delta.resize(size_t(chain.size()));
+  rvec3 p_torque = -glm::cross(chain[int64_t(hit)].reach, n), p_force = -n;
+  for (size_t k = hit + 1; k-- > 0;) {
+    const Body &body = chain[int64_t(k)];
+    u[k] = -rvec2(glm::dot(body.s_theta, p_torque), glm::dot(body.s_phi, p_torque));
+    const rvec2 du = body.d_inverse * u[k];
+    const rvec3 pa_torque = p_torque + du.x * body.u_angular[0] + du.y * body.u_angular[1];
+    const rvec3 pa_force = p_force + du.x * body.u_linear[0] + du.y * body.u_linear[1];
+    p_torque = pa_torque + glm::cross(body.arm, pa_force);
+    p_force = pa_force;
+  }
+  rvec3 alpha(0.0), acceleration(0.0), tip_change(0.0);
+  for (size_t k = 0; k < size_t(chain.size()); k++) {
+    const Body &body = chain[int64_t(k)];
+    acceleration += glm::cross(alpha, body.arm);
+    const rvec2 ut_a(
+        glm::dot(body.u_angular[0], alpha) + glm::dot(body.u_linear[0], acceleration),
+        glm::dot(body.u_angular[1], alpha) + glm::dot(body.u_linear[1], acceleration));
+    delta[k] = body.d_inverse * ((k <= hit ? u[k] : rvec2(0.0)) - ut_a);
+    alpha += delta[k].x * body.s_theta + delta[k].y * body.s_phi;
+    if (k == hit) {
+      tip_change = acceleration + glm::cross(alpha, body.reach);
+    }
+  }
+  const double response = glm::dot(n, tip_change);
+  if (!(response > 0.0)) {
+    return;
+  }
+  const double lambda = -approach / response;
+  for (size_t k = 0; k < size_t(chain.size()); k++) {
+    rates[int64_t(k)] += vec2(lambda * delta[k]);
+  }
 }
 
 }  // namespace
@@ -161,10 +236,16 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
   const bool implicit = params_.integrator == Integrator::Implicit;
   const vec3 head_center = substep.pose.translation;
 
+  mid_accelerations.assign(end - first, vec2(0.0f));
+  mat3 frame;
+  vec3 node;
+  /* Stage 0 predicts q̈₀; stage 1 takes the step with the velocity products at mid-step. */
+  for (int stage = 0; stage < 2; stage++) {
+  const bool predictor = stage == 0;
   /* Pass 1, root to tip (Table 7.1, first loop): geometry, relative velocities, the velocity
    * products, each rod's inertia and its bias force with the external force F. */
-  mat3 frame = root_frame;
-  vec3 node = positions_wo_[size_t(points.start)];
+  frame = root_frame;
+  node = positions_wo_[size_t(points.start)];
   vec3 node_velocity(0.0f);   /* relative to the head */
   vec3 parent_omega(0.0f);    /* relative to the head */
   vec3 arm(0.0f);
@@ -180,9 +261,10 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     const vec3 t = frame[2];
     body.s_theta = real(frame[1]);
     body.s_phi = -real(chart[0]);
-    const vec2 rate = angular_velocities_[i];
+    const vec2 rate = angular_velocities_[i] + (0.5f * h) * mid_accelerations[i - first];
     const vec3 relative_turn = rate.x * frame[1] - rate.y * chart[0];
     body.arm = real(arm);
+    body.reach = real(d * t);
     body.bias_angular = glm::cross(real(parent_omega), real(relative_turn)) -
                         double(rate.x * rate.y) * glm::cross(real(chart[0]), body.s_theta);
     body.bias_linear = glm::cross(real(parent_omega), glm::cross(real(parent_omega), body.arm));
@@ -223,11 +305,13 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     arm = d * t;
   }
 
-  if (r_steps != nullptr && h * fastest_turn > max_turn_per_step) {
+  if (predictor && r_steps != nullptr && h * fastest_turn > max_turn_per_step) {
     *r_steps = std::min(int(std::ceil(h * fastest_turn / max_turn_per_step)), max_turn_steps);
     return true;
   }
-  counts.contacts += pass_counts.contacts;
+  if (!predictor) {
+    counts.contacts += pass_counts.contacts;
+  }
 
   /* Pass 2, tip to root (Table 7.1, second loop): U = I^A S, D = Sᵀ U + armature,
    * u = τ − Sᵀ p^A; the body's articulated inertia and bias less what its hinge absorbs,
@@ -301,6 +385,10 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     const rvec2 q_acceleration = body.d_inverse * (body.u - ut_a);
     parent_alpha = alpha + q_acceleration.x * body.s_theta + q_acceleration.y * body.s_phi;
     parent_acceleration = acceleration;
+    if (predictor) {
+      mid_accelerations[i - first] = vec2(q_acceleration);
+      continue;
+    }
     vec2 &omega = angular_velocities_[i];
     omega += h * vec2(q_acceleration);
     if (!(std::abs(omega.x) + std::abs(omega.y) < runaway_speed / rest_lengths_[i])) {
@@ -308,8 +396,12 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     }
     angles_[i] += h * omega;
   }
+  }
 
-  /* The new shape, root to tip, with the no-penetration projection (Ward & Lin 2003 §5.5). */
+  /* The new shape, root to tip, with the no-penetration projection (Ward & Lin 2003 §5.5);
+   * then the impulses that stop the projected tips' motion into the surfaces. */
+  thread_local std::vector<std::pair<size_t, vec3>> stops; /* body, outward normal */
+  stops.clear();
   frame = root_frame;
   node = positions_wo_[size_t(points.start)];
   for (size_t i = first; i < end; i++) {
@@ -318,8 +410,14 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     Deflection deflection(angles_[i]);
     frame = deflection.rotate(chart);
     vec3 tip = node + d * frame[2];
-    if (project_segment(substep, node, tip, d, chart, angles_[i], angular_velocities_[i])) {
+    const vec2 rate = angular_velocities_[i];
+    vec3 normal;
+    if (project_segment(substep, node, tip, d, chart, angles_[i], angular_velocities_[i],
+                        &normal))
+    {
       counts.projections++;
+      angular_velocities_[i] = rate; /* stop_at_contact stops it */
+      stops.emplace_back(i - first, normal);
       deflection = Deflection(angles_[i]);
       frame = deflection.rotate(chart);
       tip = node + d * frame[2];
@@ -328,6 +426,11 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     velocities_wo_[i] = (tip - positions_wo_[i]) * inv_h;
     positions_wo_[i] = tip;
     node = tip;
+  }
+  for (const auto &[body, normal] : stops) {
+    stop_at_contact(bodies, body, real(normal),
+                    MutableSpan<vec2>(angular_velocities_).slice(int64_t(first),
+                                                                 int64_t(end - first)));
   }
   return true;
 }

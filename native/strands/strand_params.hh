@@ -82,6 +82,12 @@ struct StrandParams {
   /* N·s/m², c_air (eq. 6, f = c_air (v_wind − v)): air drag per length and relative speed.
    * It carries the wind and damps every motion through the air. */
   float air_drag = 5e-5f;
+  /* C_d: form (pressure) drag coefficient of a strand in air, beside the linear drag: the
+   * force per length ½ ρ_air C_d (2 r) |v_wind − v| (v_wind − v), r = strand_radius. A
+   * cylinder in cross-flow has C_d ≈ 1–1.5 at Reynolds numbers 10–1000 (a hair of 80 µm
+   * from about 2 m/s); the linear term c_air is its viscous part at low speed. Without it a
+   * whipped strand's tip, which weighs next to nothing, reached hundreds of m/s. */
+  float form_drag = 1.2f;
   Integrator integrator = Integrator::Implicit;
   /* Solver steps per frame; the head's transform is interpolated over them. */
   int32_t substeps = 4;
@@ -182,6 +188,13 @@ struct StrandParams {
        ParamInfo{"air_drag", "c_air", "N·s/m²", 0.0, 1.0,
                  "Air drag per length and relative speed; carries the wind (Kurihara 1993, eq. 6)"}
            .shown_as(1e6, "µN·s/m²").soft(0.0, 1e-3));
+    fn(&StrandParams::form_drag,
+       ParamInfo{"form_drag", "C_d", "", 0.0, 10.0,
+                 "Form drag coefficient of a strand in air: ½ ρ_air C_d 2r |v|² per length on top "
+                 "of the linear drag, r the strand radius; it matters from about 1 m/s and keeps "
+                 "whipped tips from flying off (a cylinder: 1–1.5; 0: linear drag only, as "
+                 "Kurihara 1993, eq. 6)"}
+           .soft(0.0, 2.0));
     fn(&StrandParams::integrator,
        ParamInfo{"integrator", "", "", 0.0, 1.0,
                  "Explicit (Kurihara 1993, eq. 7) or implicit backward Euler (Ward & Lin 2003, "

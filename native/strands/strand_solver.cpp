@@ -204,6 +204,9 @@ ForceField::ForceField(const StrandParams &params, const float line_density,
   position_gradient = -c * a + coriolis * w;
   velocity_gradient = -coriolis - mat3(params.air_drag);
   air_drag = params.air_drag;
+  constexpr float air_density = 1.2f; /* kg/m³, at 20 °C */
+  form_drag = air_density * params.form_drag * params.strand_radius;
+  this->line_density = c;
 }
 
 void StrandSolver::prepare_strand(const int64_t curve, const float h)
@@ -244,7 +247,7 @@ vec3 StrandSolver::segment_force(const Substep &substep, const size_t i, const v
   /* The force on this segment, lumped on its tip node (Kurihara 1993, eq. 6). This is the one
    * place where a node's force is assembled: a collision response (eq. 12–15) filters it
    * here, from the node's position and velocity, before it becomes a torque. */
-  vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo);
+  vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo, substep.h);
   Contact contact;
   if (colliders_ != nullptr && colliders_->find_contact(tip, contact)) {
     /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
@@ -258,7 +261,7 @@ vec3 StrandSolver::segment_force(const Substep &substep, const size_t i, const v
 
 bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec3 tip,
                                    const float d, const mat3 &chart, vec2 &angles,
-                                   vec2 &omega) const
+                                   vec2 &omega, vec3 *r_normal) const
 {
   if (colliders_ == nullptr) {
     return false;
@@ -276,6 +279,9 @@ bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec
     }
     angles = chart_angles(chart, glm::normalize(swing_onto_plane(node, tip, d, contact) - node));
     omega = vec2(0.0f);
+    if (r_normal != nullptr) {
+      *r_normal = contact.normal_wo;
+    }
     tip = node + d * Deflection(angles).rotate(chart)[2];
     moved = true;
   }

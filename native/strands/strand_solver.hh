@@ -61,15 +61,26 @@ struct ForceField {
   mat3 position_gradient = mat3(0.0f); /* G, N/m² */
   mat3 velocity_gradient = mat3(0.0f); /* V, N·s/m² */
   float air_drag = 0.0f;              /* c_air, N·s/m² */
+  float form_drag = 0.0f;             /* ½ ρ_air C_d 2r, kg/m² */
+  float line_density = 0.0f;          /* c, kg/m */
 
   ForceField() = default;
   ForceField(const StrandParams &params, float line_density, const HeadAcceleration &head,
              const HeadVelocity &head_velocity);
 
-  /* N, the force on a segment of length d whose centre is at r, moving at v. */
-  vec3 on_segment(const float d, const vec3 &r, const vec3 &v, const vec3 &wind) const
+  /* N, the force on a segment of length d whose centre is at r, moving at v, over a step of
+   * h. The form drag is explicit; it is limited to what it can do over the step, q |u|² / (1 +
+   * h q |u| / c) (linearly implicit in the speed |u| relative to the air), so it slows a
+   * segment down and never turns it around, whatever the step. */
+  vec3 on_segment(const float d, const vec3 &r, const vec3 &v, const vec3 &wind,
+                  const float h) const
   {
-    return d * (base + position_gradient * r + velocity_gradient * v + air_drag * wind);
+    const vec3 relative = wind - v;
+    const float speed = glm::length(relative);
+    const float rate = form_drag * speed; /* kg/m/s */
+    const float drag = line_density > 0.0f ? rate / (1.0f + h * rate / line_density) : rate;
+    return d * (base + position_gradient * r + velocity_gradient * v + air_drag * wind +
+                drag * relative);
   }
 };
 
@@ -240,9 +251,11 @@ class StrandSolver {
                      const vec3 &wind_wo, Counts &counts) const;
   /* Ward & Lin 2003 §5.5: when the segment from `node` (chart `chart`, angles `angles`) ends
    * at `tip` deeper than the tolerance inside a collider, it turns about `node` onto the
-   * surface and stops turning. Returns true when it moved. */
+   * surface and stops turning. Returns true when it moved; r_normal, if given, receives the
+   * outward normal of the surface it was turned onto. */
   bool project_segment(const Substep &substep, const vec3 &node, vec3 tip, float d,
-                       const mat3 &chart, vec2 &angles, vec2 &omega) const;
+                       const mat3 &chart, vec2 &angles, vec2 &omega,
+                       vec3 *r_normal = nullptr) const;
 
   StrandParams params_;
   glm::dvec3 origin_wo_;
