@@ -54,8 +54,9 @@ using glm::vec2;
 
 /* The external force per length on a strand element during one substep (Kurihara 1993,
  * eq. 6): gravity, the head's fictitious force −c a_rel(r, v_rel) (transport and Coriolis,
- * core/head_motion.hh) and air drag toward the wind, c_air (v_wind − v). All are affine in the
- * element's position r and velocity v: F / length = base + G r + V v + c_air v_wind. */
+ * core/head_motion.hh) and air drag toward the wind: linear, c_air (v_wind − v), and form
+ * drag, q |v_wind − v| (v_wind − v). All but the form drag are affine in the element's
+ * position r and velocity v: F / length = base + G r + V v + c_air v_wind + form drag. */
 struct ForceField {
   vec3 base = vec3(0.0f);             /* N/m */
   mat3 position_gradient = mat3(0.0f); /* G, N/m² */
