@@ -5,6 +5,7 @@ import pytest
 
 from conftest import shown
 from hairdyn import bridge, cli, simulation
+from hairdyn.errors import HairdynError
 
 
 def depsgraph():
@@ -163,3 +164,40 @@ def test_interpolated_children_spread_over_the_scalp(open_fixture):
     # Each child is shaped like the guides around it: it hangs down like they do.
     kid_tips = kids.positions_wo[kids.curve_offsets[1:] - 1]
     assert np.all(kid_tips[:, 2] < kid_roots[:, 2] + 0.05)
+
+
+def _hair_modifier(body):
+    return next(m for m in body.modifiers if m.type == 'PARTICLE_SYSTEM')
+
+
+def test_a_run_switches_the_particle_hair_off_while_it_steps(open_fixture, monkeypatch):
+    """Blender re-evaluates a particle hair system on every frame change of its animated
+    object, though nothing reads it after the rest shape: a run switches it off in the viewport
+    while it steps and back on after, when it ends, fails, or never starts."""
+    open_fixture("head_particles.blend")
+    body = bpy.data.objects["Body"]
+    body.hairdyn.method = 'STRANDS'
+    modifier = _hair_modifier(body)
+    assert modifier.show_viewport
+    runner = simulation.Runner(bpy.context, body, 1, 3)
+    runner.advance()
+    assert not modifier.show_viewport
+    while not runner.done:
+        runner.advance()
+    assert modifier.show_viewport
+    # A failure inside a frame: the systems come back before the error leaves advance().
+    runner = simulation.Runner(bpy.context, body, 1, 3)
+    runner.simulation.step = None  # not callable: the next frame fails
+    with pytest.raises(TypeError):
+        runner.advance()
+    assert modifier.show_viewport
+    # A bake whose cache cannot be created leaves them on too.
+    from hairdyn import bake
+
+    def refuse(*_args, **_kwargs):
+        raise HairdynError("no cache here")
+
+    monkeypatch.setattr(bake.Cache, "create", refuse)
+    with pytest.raises(HairdynError):
+        bake.start_bake(bpy.context, body)
+    assert modifier.show_viewport

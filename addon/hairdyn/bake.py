@@ -81,12 +81,23 @@ def start_bake(context, hair_obj, resume_after=None):
             cache=cache,
             resume_from=last,
         )
-        runner.record = frame_record.start(directory, resume=True)
-        return runner
-    runner = Runner(context, hair_obj, settings.frame_start, settings.frame_end)
+    else:
+        runner = Runner(context, hair_obj, settings.frame_start, settings.frame_end)
+    try:
+        if runner.cache is None:
+            runner.cache = _create_cache(runner, directory, settings, baked_with)
+        runner.record = frame_record.start(directory, resume=resume_after is not None)
+    except BaseException:
+        runner.close()  # a run that never starts gives the hair systems back
+        raise
+    return runner
+
+
+def _create_cache(runner, directory, settings, baked_with):
+    """A new cache for the runner's bake."""
     streams = runner.simulation.streams()
     strands = streams.pop(STRANDS)
-    runner.cache = Cache.create(
+    return Cache.create(
         directory,
         solver=runner.simulation.method.identifier.lower(),
         parameters=baked_with,
@@ -97,13 +108,11 @@ def start_bake(context, hair_obj, resume_after=None):
         fps=1.0 / runner.dt,
         streams={name: stream.layout() for name, stream in streams.items()},
         extra={
-            "object": hair_obj.name,
+            "object": runner.object_name,
             "outputs": {name: stream.output() for name, stream in streams.items()},
         },
         rest_positions=runner.simulation.groom.positions_wo,
     )
-    runner.record = frame_record.start(directory)
-    return runner
 
 
 def finish_bake(runner):

