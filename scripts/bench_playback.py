@@ -30,6 +30,14 @@ def main(out_path):
     offsets = np.arange(STRANDS + 1, dtype=np.int32) * POINTS_PER_STRAND
     hair = bpy.data.objects.new("Hair", bridge.new_curves_data("Hair", np.diff(offsets)))
     bpy.context.scene.collection.objects.link(hair)
+    # A groom to play back onto: straight strands 16 cm long on a 1 m square (playback reads
+    # the rest groom, which must be valid).
+    strand = np.arange(STRANDS)
+    rest = np.zeros((STRANDS, POINTS_PER_STRAND, 3), dtype=np.float32)
+    rest[:, :, 0] = (strand % 100)[:, None] * 0.01
+    rest[:, :, 1] = (strand // 100)[:, None] * 0.01
+    rest[:, :, 2] = -0.01 * np.arange(POINTS_PER_STRAND)[None, :]
+    bridge.write_curves(hair, rest.reshape(-1, 3))
     with tempfile.TemporaryDirectory() as folder:
         hair.hairdyn.cache_directory = folder
         directory = Path(folder) / "Hair"
