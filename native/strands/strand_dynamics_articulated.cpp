@@ -36,8 +36,9 @@
  * thousands of rad/s, ran away within a few frames.
  *
  * Contact: a segment whose tip ends a step inside a body turns about its root onto the
- * surface (Ward & Lin 2003 §5.5), and the tip's velocity into the surface is stopped by an
- * inelastic impulse through the chain's articulated inertia (stop_at_contact). That never
+ * surface (Ward & Lin 2003 §5.5), its child keeping its direction, and the tip's velocity
+ * into the surface is stopped by an inelastic impulse through the chain's articulated
+ * inertia (stop_at_contact). That never
  * adds energy; stopping the one hinge instead (Kurihara 1993's hinges, where each segment
  * moves on its own) changes the generalised momentum of everything distal to it, and fed a
  * whipping chain energy until it ran away. */
@@ -404,14 +405,25 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
   stops.clear();
   frame = root_frame;
   node = positions_wo_[size_t(points.start)];
+  /* A projected segment turns alone: its child keeps the direction it had (its hinge takes
+   * the turn back), so the strand beyond moves by the tip's small displacement instead of
+   * swinging about the projected segment's root. Swinging it, a strand lying on the head
+   * flicked its tip by millimetres at every projection and never came to rest. */
+  bool keep_direction = false;
+  vec3 kept_direction(0.0f);
   for (size_t i = first; i < end; i++) {
     const float d = rest_lengths_[i];
     const mat3 chart = frame * rest_rotations_[i];
+    if (keep_direction) {
+      angles_[i] = chart_angles(chart, kept_direction);
+      keep_direction = false;
+    }
     Deflection deflection(angles_[i]);
     frame = deflection.rotate(chart);
     vec3 tip = node + d * frame[2];
     const vec2 rate = angular_velocities_[i];
     vec3 normal;
+    const mat3 unprojected = frame;
     if (project_segment(substep, node, tip, d, chart, angles_[i], angular_velocities_[i],
                         &normal))
     {
@@ -421,6 +433,10 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
       deflection = Deflection(angles_[i]);
       frame = deflection.rotate(chart);
       tip = node + d * frame[2];
+      if (i + 1 < end) {
+        keep_direction = true;
+        kept_direction = Deflection(angles_[i + 1]).rotate(unprojected * rest_rotations_[i + 1])[2];
+      }
     }
     trig_[i] = deflection.trig();
     velocities_wo_[i] = (tip - positions_wo_[i]) * inv_h;
