@@ -47,6 +47,10 @@ struct Scene {
   void step(const vec3 &eye) { solver.step(frame_dt, head, camera_view_projection(eye)); }
 };
 
+/* How far the no-jump tests let the output's largest change per frame exceed the unsplit
+ * simulation's motion plus the spring's pull on the raw jump (see NoJumpAtATransition). */
+constexpr float jump_slack = 1.25f;
+
 const vec3 far_eye(0.0f, -30.0f, 0.0f);
 const vec3 close_eye(0.0f, -0.2f, 0.3f); /* Above the forehead, looking at the head. */
 
@@ -322,7 +326,13 @@ TEST(LodSolver, NoJumpAtATransition)
    * The bound takes the unsplit simulation's motion for the split one's own; that holds while
    * the wind is gentle. With form drag (StrandParams::form_drag) a 3 m/s wind pushes about
    * three times as hard, the finer skeletons' own motion outgrows the unsplit one's, and the
-   * bound no longer separates the transition from the motion: linear drag only here. */
+   * bound no longer separates the transition from the motion: linear drag only here.
+   *
+   * Only the active skeletons are stepped: a child waits unstepped until its parent splits,
+   * then starts from its parent's angles and rates on its own rest shape and settles toward
+   * its own equilibrium, a motion the unsplit simulation's does not include (when every level
+   * was stepped every frame the largest change here was 0.0257 m, with the spring; now 0.0374
+   * m). The bound allows the settling a quarter more: jump_slack. */
   WindParams wind;
   wind.speed = 3.0f;
   wind.turbulence = 0.5f;
@@ -362,7 +372,7 @@ TEST(LodSolver, NoJumpAtATransition)
     }
     else {
       const float pull = 1.0f - std::exp(-frame_dt / transition_time);
-      EXPECT_LE(jump, motion + pull * raw_jump);
+      EXPECT_LE(jump, jump_slack * (motion + pull * raw_jump));
       EXPECT_LT(jump, raw_jump);
     }
   }
@@ -396,4 +406,142 @@ TEST(LodSolver, SameBitsOnOneAndTwoThreads)
   }
   set_thread_num(0);
   EXPECT_EQ(max_change(results[0], results[1]), 0.0f);
+}
+
+TEST(LodSolver, StepsOnlyTheActiveSkeletons)
+{
+  /* The cost of a frame is the active skeletons': each frame steps the active ones and, on a
+   * switch, the ones that drove strands at the last frame; no other level is stepped. */
+  Scene scene(scene_params());
+  const LodSolver &solver = scene.solver;
+  const int64_t nodes = solver.hierarchy().nodes_num();
+  scene.step(far_eye);
+  EXPECT_EQ(solver.active_num(), solver.hierarchy().top_nodes_num());
+  EXPECT_EQ(solver.stepped_num(), solver.active_num());
+  EXPECT_EQ(solver.stepped_per_level(), solver.active_per_level());
+  int64_t steady = 0, switching = 0;
+  for (int frame = 0; frame < 24; frame++) {
+    const std::vector<uint8_t> before(solver.active().begin(), solver.active().end());
+    const std::vector<int64_t> levels_before = solver.active_per_level();
+    scene.step(frame < 12 ? close_eye : far_eye);
+    int64_t expected = 0;
+    std::vector<int64_t> expected_per_level(size_t(solver.hierarchy().max_depth() + 1), 0);
+    for (int64_t node = 0; node < nodes; node++) {
+      if (solver.active()[node] || before[size_t(node)]) {
+        expected++;
+        expected_per_level[size_t(solver.hierarchy().depth(node))]++;
+      }
+    }
+    EXPECT_EQ(solver.stepped_num(), expected) << "frame " << frame;
+    EXPECT_EQ(solver.stepped_per_level(), expected_per_level) << "frame " << frame;
+    if (solver.splits_num() + solver.merges_num() + solver.collapses_num() == 0) {
+      EXPECT_EQ(solver.stepped_num(), solver.active_num()) << "frame " << frame;
+      steady++;
+    }
+    else {
+      switching++;
+    }
+    EXPECT_LT(solver.stepped_num(), nodes);
+  }
+  EXPECT_GT(steady, 0);
+  EXPECT_GT(switching, 0);
+
+  /* Off: the finest level only. */
+  LodParams off = scene_params();
+  off.enabled = false;
+  Scene fine(off);
+  fine.step(far_eye);
+  EXPECT_EQ(fine.solver.stepped_num(),
+            int64_t(fine.solver.hierarchy().level_nodes(fine.solver.finest_level()).size()));
+}
+
+TEST(LodSolver, NoJumpAfterALongInactivePeriod)
+{
+  /* As NoJumpAtATransition, with skeletons held inactive for a long time while the head
+   * turns under them: the camera is far for two seconds (the finer levels wait), close for
+   * one (the groups split), far again for a second and a half (they merge back into parents
+   * that waited a second). The head turns half a radian about its vertical axis in the first
+   * second and back in the third, so a waiting skeleton's place is far from where it was last
+   * stepped or placed.
+   *
+   * At the frame of the first split the output equals the unsplit simulation's, and at the
+   * frame of the first merge the output of a simulation that stays split (the old skeletons
+   * still drive it; the jump is held in the residual). With the spring, the output's largest
+   * change per frame is bounded as in NoJumpAtATransition; without it, the raw jump between
+   * two skeletons' placements stays within 3 × the unsplit motion (when every level was
+   * stepped every frame: 0.0997 m against 0.0388 m, 2.6 ×; now 0.0866 m, 2.2 ×). With the
+   * spring: 0.0401 m then, 0.0581 m now (see jump_slack). */
+  WindParams wind;
+  wind.speed = 3.0f;
+  wind.turbulence = 0.5f;
+  StrandParams strand_params;
+  strand_params.form_drag = 0.0f;
+  const auto head_at = [](const int frame) {
+    const auto ease = [](const float t) {
+      const float x = std::clamp(t, 0.0f, 1.0f);
+      return x * x * (3.0f - 2.0f * x);
+    };
+    const float angle = 0.5f * (ease(float(frame) / 24.0f) - ease(float(frame - 50) / 16.0f));
+    return glm::rotate(mat4(1.0f), angle, vec3(0.0f, 0.0f, 1.0f));
+  };
+  const auto eye_at = [](const int frame) {
+    return frame < 48 || frame >= 72 ? far_eye : close_eye;
+  };
+  float raw_jump = 0.0f;
+  for (const float transition_time : {0.0f, 0.25f}) {
+    LodParams params = scene_params();
+    params.transition_time = transition_time;
+    Scene scene(params, wind, 300, strand_params);
+    Scene unsplit(params, wind, 300, strand_params);
+    Scene split(params, wind, 300, strand_params);
+    std::vector<vec3> previous, unsplit_previous;
+    float jump = 0.0f, motion = 0.0f;
+    int64_t splits = 0, merges = 0, merges_after = 0;
+    for (int frame = 0; frame < 108; frame++) {
+      previous.assign(scene.solver.positions().begin(), scene.solver.positions().end());
+      unsplit_previous.assign(unsplit.solver.positions().begin(), unsplit.solver.positions().end());
+      const mat4 head_now = head_at(frame);
+      scene.solver.step(frame_dt, head_now, camera_view_projection(eye_at(frame)));
+      unsplit.solver.step(frame_dt, head_now, camera_view_projection(far_eye));
+      split.solver.step(frame_dt, head_now,
+                        camera_view_projection(frame < 48 ? far_eye : close_eye));
+      if (frame < 48) {
+        ASSERT_EQ(scene.solver.splits_num(), 0);
+      }
+      if (transition_time > 0.0f && splits == 0 && scene.solver.splits_num() > 0) {
+        EXPECT_EQ(frame, 48);
+        EXPECT_LT(max_change(scene.solver.positions(), unsplit.solver.positions()), 1e-6f);
+      }
+      if (frame >= 72 && merges_after == 0 && scene.solver.merges_num() > 0) {
+        /* Until now the two had the same cameras. */
+        EXPECT_LT(max_change(scene.solver.positions(), split.solver.positions()),
+                  transition_time > 0.0f ? 1e-6f : 1e9f);
+      }
+      if (frame >= 72) {
+        merges_after += scene.solver.merges_num();
+      }
+      if (frame >= 48) {
+        jump = std::max(jump, max_change(scene.solver.positions(), previous));
+        motion = std::max(motion, max_change(unsplit.solver.positions(), unsplit_previous));
+        splits += scene.solver.splits_num();
+        merges += scene.solver.merges_num();
+      }
+    }
+    ASSERT_GT(splits, 10);
+    ASSERT_GT(merges_after, 10);
+    ASSERT_GT(motion, 1e-3f);
+    std::printf("transition_time %.2f s: largest output change per frame %.4f m, unsplit "
+                "simulation %.4f m, %lld splits, %lld merges\n",
+                double(transition_time), double(jump), double(motion), (long long)splits,
+                (long long)merges);
+    if (transition_time == 0.0f) {
+      raw_jump = jump;
+      EXPECT_LT(raw_jump, 3.0f * motion);
+    }
+    else {
+      const float pull = 1.0f - std::exp(-frame_dt / transition_time);
+      EXPECT_LE(jump, jump_slack * (motion + pull * raw_jump));
+      EXPECT_LT(jump, raw_jump);
+    }
+  }
 }

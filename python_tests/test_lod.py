@@ -108,6 +108,7 @@ def test_far_camera_keeps_the_coarsest_strips_and_a_close_one_refines():
     assert (solver.lod_level == 0).all()
     assert solver.skeletons_per_level[0] == solver.top_nodes_num
     assert sum(solver.skeletons_per_level) == solver.active_num
+    assert solver.stepped_num == solver.active_num  # no switch: only the active ones step
     close = view_projection((0.0, -0.2, 0.3))
     switches = 0
     for _ in range(solver.max_depth + 2):

@@ -43,9 +43,12 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
       normals.push_back(hierarchy_.root_normal(hierarchy_.top_node(node)));
     }
     level_solvers_.emplace_back(offsets, rest, head_to_world_rest, normals, strand_params, wind);
+    level_stepped_.emplace_back(offsets.size() - 1, uint8_t(0));
   }
 
   active_.assign(size_t(nodes), 0);
+  shown_.assign(size_t(nodes), 0);
+  current_.assign(size_t(nodes), 1);
   visible_.assign(size_t(nodes), 1);
   wanted_.assign(size_t(nodes), 0);
   frames_.resize(size_t(nodes * n));
@@ -86,6 +89,9 @@ void LodSolver::reset(const mat4 &head_to_world)
   for (const int32_t node : hierarchy_.level_nodes(lod_params_.enabled ? coarsest_ : finest_)) {
     set_active(node, true);
   }
+  /* Every skeleton is at rest where the head is. */
+  shown_ = active_;
+  std::fill(current_.begin(), current_.end(), 1);
   placed_nodes_ = strand_nodes_;
   std::fill(residuals_wo_.begin(), residuals_wo_.end(), vec3(0.0f));
   splits_num_ = merges_num_ = collapses_num_ = 0;
@@ -123,13 +129,33 @@ Span<vec2> LodSolver::angular_velocities(const int64_t node) const
 
 void LodSolver::update_frames()
 {
+  /* Only the skeletons that drive strands now or did at the last placement are read. */
   const int32_t n = hierarchy_.skeleton_points_num();
   parallel_for(hierarchy_.nodes_num(), 64, [&](const IndexRange range) {
     for (int64_t node = range.start; node < range.one_after_last(); node++) {
+      if (!active_[size_t(node)] && !shown_[size_t(node)]) {
+        continue;
+      }
       current_skeleton_frames(skeleton(node), hierarchy_.rest_frames(node), head_rotation_,
                               MutableSpan<mat3>(frames_.data() + node * n, n));
     }
   });
+}
+
+void LodSolver::take_state(const int32_t node, const Span<vec2> angles, const Span<vec2> rates)
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  const Span<vec2> old_angles = this->angles(node);
+  const Span<vec2> old_rates = angular_velocities(node);
+  bool same = current_[size_t(node)] != 0;
+  for (int32_t k = 1; k < n && same; k++) {
+    same = old_angles[k] == angles[k] && old_rates[k] == rates[k];
+  }
+  if (!same) {
+    level_solvers_[size_t(hierarchy_.depth(node))].set_curve_state(level_curves_[size_t(node)],
+                                                                   angles, rates);
+    current_[size_t(node)] = 1;
+  }
 }
 
 void LodSolver::absorb(const int32_t node, const Span<int32_t> sources)
@@ -138,8 +164,7 @@ void LodSolver::absorb(const int32_t node, const Span<int32_t> sources)
    * rates), weighted by the strands each carries. Written as s0 + Σ w (s − s0) so that equal
    * states average to themselves bit for bit. */
   const int32_t n = hierarchy_.skeleton_points_num();
-  StrandSolver &target = level_solvers_[size_t(hierarchy_.depth(node))];
-  const int64_t target_start = level_curves_[size_t(node)] * n;
+  std::vector<vec2> new_angles(size_t(n), vec2(0.0f)), new_rates(size_t(n), vec2(0.0f));
   const Span<vec2> first_angles = angles(sources[0]);
   const Span<vec2> first_rates = angular_velocities(sources[0]);
   const float total = float(hierarchy_.strands(node).size());
@@ -150,9 +175,10 @@ void LodSolver::absorb(const int32_t node, const Span<int32_t> sources)
       angle_sum += w * (angles(source)[k] - first_angles[k]);
       rate_sum += w * (angular_velocities(source)[k] - first_rates[k]);
     }
-    target.angles_for_write()[target_start + k] = first_angles[k] + angle_sum;
-    target.angular_velocities_for_write()[target_start + k] = first_rates[k] + rate_sum;
+    new_angles[size_t(k)] = first_angles[k] + angle_sum;
+    new_rates[size_t(k)] = first_rates[k] + rate_sum;
   }
+  take_state(node, new_angles, new_rates);
   for (const int32_t source : sources) {
     active_[size_t(source)] = 0;
   }
@@ -164,17 +190,11 @@ void LodSolver::split(const int32_t node)
   assert(active_[size_t(node)] && !hierarchy_.is_leaf(node));
   /* §6.2: each child inherits its parent's dynamic state; its own rest shape carries its
    * stored offset, since the angles are offsets from each skeleton's rest. */
-  const int32_t n = hierarchy_.skeleton_points_num();
   const Span<vec2> parent_angles = angles(node);
   const Span<vec2> parent_rates = angular_velocities(node);
   const IndexRange kids = hierarchy_.children(node);
-  StrandSolver &solver = level_solvers_[size_t(hierarchy_.depth(node) + 1)];
   for (int64_t child = kids.start; child < kids.one_after_last(); child++) {
-    const int64_t start = level_curves_[size_t(child)] * n;
-    for (int32_t k = 1; k < n; k++) {
-      solver.angles_for_write()[start + k] = parent_angles[k];
-      solver.angular_velocities_for_write()[start + k] = parent_rates[k];
-    }
+    take_state(int32_t(child), parent_angles, parent_rates);
     set_active(int32_t(child), true);
   }
   active_[size_t(node)] = 0;
@@ -418,14 +438,41 @@ void LodSolver::step(const float frame_dt, const mat4 &head_to_world, const mat4
     }
     starting_ = false;
   }
-  /* Each level's solver runs its strands in parallel. */
-  for (StrandSolver &solver : level_solvers_) {
-    solver.step(frame_dt, head_to_world);
+  /* Only the active skeletons, and on a switch the ones that drove strands at the last frame
+   * (place_strands measures the jump between the two at this frame), are stepped; each
+   * level's solver runs its strands in parallel. */
+  for (int64_t node = 0; node < hierarchy_.nodes_num(); node++) {
+    const uint8_t stepped = active_[size_t(node)] || shown_[size_t(node)];
+    level_stepped_[size_t(hierarchy_.depth(node))][size_t(level_curves_[size_t(node)])] = stepped;
+    current_[size_t(node)] = stepped;
+  }
+  for (size_t depth = 0; depth < level_solvers_.size(); depth++) {
+    level_solvers_[depth].set_stepped(level_stepped_[depth]);
+    level_solvers_[depth].step(frame_dt, head_to_world);
   }
   head_rotation_ = HeadPose::from_matrix(head_to_world).rotation_matrix() *
                    glm::transpose(rest_pose_.rotation_matrix());
   update_frames();
   place_strands(frame_dt);
+  shown_ = active_;
+}
+
+int64_t LodSolver::stepped_num() const
+{
+  int64_t count = 0;
+  for (const StrandSolver &solver : level_solvers_) {
+    count += solver.stepped_num();
+  }
+  return count;
+}
+
+std::vector<int64_t> LodSolver::stepped_per_level() const
+{
+  std::vector<int64_t> counts;
+  for (const StrandSolver &solver : level_solvers_) {
+    counts.push_back(solver.stepped_num());
+  }
+  return counts;
 }
 
 std::vector<int64_t> LodSolver::active_per_level() const

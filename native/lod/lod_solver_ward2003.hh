@@ -5,15 +5,23 @@
  * level per frame, and every artist strand placed on the skeleton that drives it.
  *
  * Dynamics. Each level (depth) of the hierarchy is one StrandSolver over all skeletons of
- * that depth; every level is stepped every frame, so every skeleton's state stays
- * consistent and a switch only decides which skeleton drives which strands. At a split the
- * children take the parent's dynamic state (§6.2), at a merge the parent takes the average
- * of its children's (§6.3), through the solver's angle and angular-velocity accessors: the
- * angles are offsets from each skeleton's own rest shape, measured in charts that every
- * skeleton of a tree orients from the same root normal, so a child inheriting its parent's
- * angles turns as its parent did and keeps its stored offset from it. Stepping only the active skeletons (the speed-up of
- * Ward's Tables 1-2) needs the strand solver to step a subset of its strands and to take a
- * strand's state from positions; until it can, the cost is that of the whole hierarchy.
+ * that depth, and each frame steps only the skeletons of the current cut (the active ones)
+ * and, on the frame of a switch, the ones that drove strands at the last frame (so the jump
+ * between the old and the new skeleton's placement is measured at the same instant):
+ * StrandSolver::set_stepped. The cost of a frame is that of the active skeletons (Ward's
+ * Tables 1-2), not of the whole hierarchy. An inactive skeleton is held: its angles and rates
+ * stay as they were and nothing integrates them; no output reads it. At a split the children
+ * take the parent's dynamic state (§6.2), at a merge the parent takes the average of its
+ * children's (§6.3): the angles are offsets from each skeleton's own rest shape, measured in
+ * charts that every skeleton of a tree orients from the same root normal, so a child
+ * inheriting its parent's angles turns as its parent did and keeps its stored offset from
+ * it. The angles and rates are the whole of a skeleton's dynamic state; what a held skeleton
+ * lacks is where the head has gone meanwhile, so a skeleton that takes a state is placed
+ * (StrandSolver::set_curve_state) with the head where the last step left it: its root and
+ * frames carried by the head, its nodes at the taken angles, its velocities from the taken
+ * rates. Its first step then starts from that state whatever it did before it was held. (A
+ * skeleton stepped by the last step that takes back its own state bit for bit keeps its
+ * nodes, so a split undone at once changes nothing.)
  *
  * Output. Every strand follows the skeleton that drives it with its rest offset
  * (lod/skinning_ward2003.hh), so the output keeps the groom's topology. At a switch, the jump
@@ -81,8 +89,9 @@ class LodSolver {
   Span<uint8_t> visible() const { return visible_; }
   Span<int32_t> wanted_levels() const { return wanted_; }
 
-  /* A node's current skeleton and frames (end of the last step: a state given by a split or
-   * merge since shows at the next step). */
+  /* A node's current skeleton and frames: where the last step, or a split or merge since,
+   * put it; for a node that is neither active nor was stepped by the last step, where it was
+   * when it was last stepped or placed (frames: last stepped). */
   Span<vec3> skeleton(int64_t node) const;
   Span<mat3> frames(int64_t node) const;
   /* The strand solver of one depth; node `node` is its curve level_curve(node). */
@@ -91,6 +100,11 @@ class LodSolver {
   /* A node's segment angles and rates (points 1 .. n-1 of its curve; slot 0 is the root). */
   Span<vec2> angles(int64_t node) const;
   Span<vec2> angular_velocities(int64_t node) const;
+
+  /* Skeletons the last step advanced (the active ones, plus those of the last frame that a
+   * switch made inactive), and per level. */
+  int64_t stepped_num() const;
+  std::vector<int64_t> stepped_per_level() const;
 
   /* The transitions step() makes, for tests: split an active node into its children (§6.2);
    * merge the active children of `parent` into it (§6.3). The output is updated at the next
@@ -109,6 +123,10 @@ class LodSolver {
   void update_frames();
   void place_strands(float frame_dt);
   void set_active(int32_t node, bool active);
+  /* `node` takes the dynamic state (angles, rates; slot 0 ignored) and is placed with the
+   * head where the last step left it; a node whose nodes are current and whose state this
+   * leaves unchanged bit for bit is left alone. */
+  void take_state(int32_t node, Span<vec2> angles, Span<vec2> rates);
 
   LodHierarchy hierarchy_;
   LodParams lod_params_;
@@ -120,8 +138,13 @@ class LodSolver {
   std::vector<StrandSolver> level_solvers_;
   std::vector<int64_t> level_curves_;
 
-  /* Per node. */
-  std::vector<uint8_t> active_, visible_;
+  /* Per depth: per curve of its solver, stepped by the next step. */
+  std::vector<std::vector<uint8_t>> level_stepped_;
+
+  /* Per node. shown_: active at the end of the last step (drove strands at the last
+   * placement); current_: its solver nodes agree with its state and the head's last pose
+   * (stepped by the last step, or placed since). */
+  std::vector<uint8_t> active_, visible_, shown_, current_;
   std::vector<int32_t> wanted_;
   /* Per node and control point: current frames. */
   std::vector<mat3> frames_;

@@ -165,6 +165,59 @@ void StrandSolver::set_pinned(const Span<uint8_t> pinned)
   velocities_before_.resize(rest_positions_wo_.size());
 }
 
+void StrandSolver::set_stepped(const Span<uint8_t> stepped)
+{
+  assert(stepped.is_empty() || stepped.size() == curves_num());
+  stepped_.assign(stepped.begin(), stepped.end());
+  stepped_curves_.clear();
+  for (int64_t curve = 0; curve < stepped.size(); curve++) {
+    if (stepped[curve]) {
+      stepped_curves_.push_back(curve);
+    }
+  }
+}
+
+void StrandSolver::place_curve(const int64_t curve)
+{
+  /* The dynamics' own placement (a segment's frame is its parent's, times its rest rotation,
+   * times its deflection), with the velocities the rates give: a segment turns at
+   * Ω_i = Ω_{i-1} + θ̇ e_φ − φ̇ x (x the chart's pole, see take_back_strand) on top of the
+   * head's turn, and its tip moves at v_i = v_{i-1} + d Ω_i × t. */
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  mat3 frame = pose_.rotation_matrix() * root_frames_head_[size_t(curve)];
+  root_frames_wo_[size_t(curve)] = frame;
+  vec3 node = pose_.transform_point(root_positions_head_[size_t(curve)]);
+  vec3 node_velocity = head_velocity_.of_point(node - pose_.translation);
+  vec3 omega = head_velocity_.angular;
+  positions_wo_[size_t(points.start)] = node;
+  velocities_wo_[size_t(points.start)] = node_velocity;
+  for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+    const float d = rest_lengths_[size_t(i)];
+    const mat3 chart = frame * rest_rotations_[size_t(i)];
+    const Deflection deflection(angles_[size_t(i)]);
+    frame = deflection.rotate(chart);
+    trig_[size_t(i)] = deflection.trig();
+    const vec2 rate = angular_velocities_[size_t(i)];
+    omega += rate.x * frame[1] - rate.y * chart[0];
+    node += d * frame[2];
+    node_velocity += d * glm::cross(omega, frame[2]);
+    positions_wo_[size_t(i)] = node;
+    velocities_wo_[size_t(i)] = node_velocity;
+  }
+}
+
+void StrandSolver::set_curve_state(const int64_t curve, const Span<vec2> angles,
+                                   const Span<vec2> angular_velocities)
+{
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  assert(angles.size() == points.size && angular_velocities.size() == points.size);
+  for (int64_t k = 1; k < points.size; k++) {
+    angles_[size_t(points.start + k)] = angles[k];
+    angular_velocities_[size_t(points.start + k)] = angular_velocities[k];
+  }
+  place_curve(curve);
+}
+
 double StrandSolver::pass_ms(const std::string &name) const
 {
   double ms = 0.0;
@@ -448,14 +501,17 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     }
   }
 
-  /* Counts per chunk of strands, summed in order: deterministic for any thread count. */
+  /* Counts per chunk of strands, summed in order: deterministic for any thread count. Only
+   * the strands set_stepped keeps (all without a mask) are visited. */
   const int64_t grain = 32;
-  std::vector<Counts> counts(size_t((curves_num() + grain - 1) / grain));
+  const bool masked = !stepped_.empty();
+  const int64_t stepped_num = masked ? int64_t(stepped_curves_.size()) : curves_num();
+  std::vector<Counts> counts(size_t((stepped_num + grain - 1) / grain));
   const auto for_each_curve = [&](auto &&fn) {
-    parallel_for(curves_num(), grain, [&](const IndexRange range) {
+    parallel_for(stepped_num, grain, [&](const IndexRange range) {
       Counts &chunk = counts[size_t(range.start / grain)];
-      for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
-        fn(curve, chunk);
+      for (int64_t index = range.start; index < range.one_after_last(); index++) {
+        fn(masked ? stepped_curves_[size_t(index)] : index, chunk);
       }
     });
   };
@@ -514,6 +570,21 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
                            std::chrono::steady_clock::now() - start)
                            .count();
       }
+      if (masked) {
+        /* The passes saw the held strands where they are held; what they did to them is
+         * undone (a held strand keeps its nodes). */
+        parallel_for(curves_num(), 256, [&](const IndexRange range) {
+          for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
+            if (!stepped_[size_t(curve)]) {
+              const IndexRange points = curve_points(curve_offsets_, curve);
+              std::copy_n(&positions_before_[size_t(points.start)], points.size,
+                          &positions_wo_[size_t(points.start)]);
+              std::copy_n(&velocities_before_[size_t(points.start)], points.size,
+                          &velocities_wo_[size_t(points.start)]);
+            }
+          }
+        });
+      }
       for_each_curve([&](const int64_t curve, Counts &chunk) {
         if (diverged[size_t(curve)]) {
           place_at_rest(curve, substep.pose);
@@ -524,6 +595,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
       });
     }
   }
+  stepped_num_ = stepped_num;
   contacts_num_ = projections_num_ = diverged_num_ = 0;
   for (const Counts &chunk : counts) {
     contacts_num_ += chunk.contacts;

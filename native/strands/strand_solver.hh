@@ -149,6 +149,36 @@ class StrandSolver {
    * name no pass has. */
   double pass_ms(const std::string &name) const;
 
+  /* Steps only some strands: per strand, non-zero for the strands the next steps advance;
+   * an empty span (the default) advances every strand, bit for bit as without a mask.
+   *
+   * A strand left out is held, not simulated: its angles and rates stay as they are, i.e. it
+   * keeps its shape relative to its root frame, which the head carries; nothing of it is
+   * integrated, collided or counted (passes see its nodes where they are held, and what they
+   * do to them is undone), and its nodes, velocities and
+   * root frame stay where its last step (or place_curve) left them, however far the head
+   * has moved since. Before it is stepped again, place_curve puts it where the head is now
+   * on whatever angles and rates it then has (a state written through angles_for_write), so
+   * its first substep sees no jump of its root and its velocities come from its rates: a
+   * strand kept out for a long time resumes as one whose state was just written. (A strand
+   * that was stepped by the last step and whose state nobody wrote since needs no
+   * place_curve: its nodes are where the head and its angles put them.) */
+  void set_stepped(Span<uint8_t> stepped);
+  /* Per strand, the mask set_stepped keeps (empty: every strand is stepped). */
+  Span<uint8_t> stepped() const { return stepped_; }
+  /* Strands the last step advanced. */
+  int64_t stepped_num() const { return stepped_num_; }
+  /* Strand `curve`'s nodes, root frame and velocities from its angles and rates, with the
+   * head where the last step left it (its pose and velocity): the root and root frame carried
+   * by the head, each segment at its angles in its parent's frame (as the dynamics place it),
+   * each node moving with the head plus the turns its hinges' rates make. The way to make a
+   * state written through angles_for_write and angular_velocities_for_write the strand's
+   * state now, not only from the next step. */
+  void place_curve(int64_t curve);
+  /* Writes strand `curve`'s angles and rates (one per point of the strand; the root slot is
+   * ignored) and places it (place_curve). */
+  void set_curve_state(int64_t curve, Span<vec2> angles, Span<vec2> angular_velocities);
+
   /* Nodes whose force the reaction constraint changed, and nodes put back on the surface,
    * during the last step (all substeps). */
   int64_t contacts_num() const { return contacts_num_; }
@@ -298,6 +328,11 @@ class StrandSolver {
   std::vector<int64_t> pin_offsets_;
   std::vector<int64_t> pins_;
   std::vector<vec3> pins_rest_head_;
+
+  /* Per strand, the set_stepped mask (empty: all), and the strands the last step advanced. */
+  std::vector<uint8_t> stepped_;
+  std::vector<int64_t> stepped_curves_; /* the strands the mask keeps, in order */
+  int64_t stepped_num_ = 0;
 
   std::vector<SubstepPass *> passes_;
   std::vector<vec3> positions_before_; /* the nodes before the passes of a substep */
