@@ -259,7 +259,7 @@ ForceField::ForceField(const StrandParams &params, const float line_density,
   air_drag = params.air_drag;
   constexpr float air_density = 1.2f; /* kg/m³, at 20 °C */
   form_drag = air_density * params.form_drag * params.strand_radius;
-  this->line_density = c;
+  mass_per_length = c;
 }
 
 void StrandSolver::prepare_strand(const int64_t curve, const float h)

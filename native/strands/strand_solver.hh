@@ -63,7 +63,7 @@ struct ForceField {
   mat3 velocity_gradient = mat3(0.0f); /* V, N·s/m² */
   float air_drag = 0.0f;              /* c_air, N·s/m² */
   float form_drag = 0.0f;             /* ½ ρ_air C_d 2r, kg/m² */
-  float line_density = 0.0f;          /* c, kg/m */
+  float mass_per_length = 0.0f;       /* c, kg/m */
 
   ForceField() = default;
   ForceField(const StrandParams &params, float line_density, const HeadAcceleration &head,
@@ -79,7 +79,8 @@ struct ForceField {
     const vec3 relative = wind - v;
     const float speed = glm::length(relative);
     const float rate = form_drag * speed; /* kg/m/s */
-    const float drag = line_density > 0.0f ? rate / (1.0f + h * rate / line_density) : rate;
+    const float drag = mass_per_length > 0.0f ? rate / (1.0f + h * rate / mass_per_length) :
+                                                rate;
     return d * (base + position_gradient * r + velocity_gradient * v + air_drag * wind +
                 drag * relative);
   }
