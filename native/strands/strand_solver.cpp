@@ -330,6 +330,12 @@ bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec
         contact.depth <= substep.projection_tolerance_wo) {
       break;
     }
+    if (glm::dot(node - contact.surface_point_wo, contact.normal_wo) <= -d) {
+      /* The root is deeper than the segment is long (a groom grown inside the body, as
+       * Sintel's roots are): no turn brings the tip out, and forcing it to T each step made
+       * the articulated chain run away. The reaction constraint pushes it out instead. */
+      break;
+    }
     angles = chart_angles(chart, glm::normalize(swing_onto_plane(node, tip, d, contact) - node));
     omega = vec2(0.0f);
     if (r_normal != nullptr) {
