@@ -86,12 +86,15 @@ def test_head_shake_keeps_hair_out_of_the_body(open_fixture):
     assert report["penetration_share"] <= 0.005
 
 
+@pytest.mark.parametrize("model", ['KURIHARA1993', 'ARTICULATED'])
 @pytest.mark.parametrize("use_collision", [True, False])
-def test_wind_presses_hair_against_the_head(open_fixture, use_collision):
+def test_wind_presses_hair_against_the_head(open_fixture, use_collision, model):
     """A strong wind from behind presses soft hair onto the back of the head: without
-    collision it goes through, with collision it stays out (so the checks can fail)."""
+    collision it goes through, with collision it stays out (so the checks can fail). Both
+    strand models (the articulated one with human hair's stiffness)."""
     hair = strands_on(open_fixture, "head_curves.blend")
     strands = hair.hairdyn.strands
+    strands.model = model
     wind = hair.hairdyn.wind
     wind.speed, wind.direction, wind.turbulence = 15.0, (0.0, -1.0, 0.0), 0.0
     strands.k_theta = strands.k_phi = shown("StrandParams", "k_theta", 2e-8)  # N·m/rad
