@@ -52,7 +52,7 @@ enum class StrandModel : int32_t {
 };
 
 struct StrandParams {
-  StrandModel model = StrandModel::Kurihara1993;
+  StrandModel model = StrandModel::Articulated;
   /* Pa, E: Young's modulus of the hair (human hair 3–4 GPa; articulated model). */
   float youngs_modulus = 3.5e9f;
   /* m, r: radius of one strand's cross-section (human hair 35–50 µm; articulated model). */
@@ -131,8 +131,8 @@ struct StrandParams {
        ParamInfo{"model", "", "", 0.0, 1.0,
                  "Articulated: the full coupled chain, sag and swing independent of the "
                  "segment count (Featherstone's articulated-body algorithm, Hadap 2006). "
-                 "Kurihara 1993: each hinge alone, with its own k, γ and c (eq. 1-7); the "
-                 "default, since the articulated model can still diverge in heavy contact",
+                 "Kurihara 1993: each hinge alone, with its own k, γ and c (eq. 1-7), as the "
+                 "paper has it (its preset keeps it)",
                  "articulated,kurihara1993"});
     fn(&StrandParams::youngs_modulus,
        ParamInfo{"youngs_modulus", "E", "Pa", 1e3, 1e12,
