@@ -312,6 +312,24 @@ TEST(LodSolver, MergeAveragesTheChildrenByStrands)
   }
 }
 
+/* The no-jump tests' wind and strands: the Kurihara model with linear drag, on which their
+ * bounds were set (see NoJumpAtATransition). */
+static WindParams gusty_wind()
+{
+  WindParams wind;
+  wind.speed = 3.0f;
+  wind.turbulence = 0.5f;
+  return wind;
+}
+
+static StrandParams no_jump_strands()
+{
+  StrandParams params;
+  params.model = StrandModel::Kurihara1993;
+  params.form_drag = 0.0f;
+  return params;
+}
+
 TEST(LodSolver, NoJumpAtATransition)
 {
   /* Wind blows; the camera is far for half a second, then close: the groups split a level
@@ -338,12 +356,8 @@ TEST(LodSolver, NoJumpAtATransition)
    * model (the default) the skeletons swing more freely: the unsplit motion is 0.048 m per
    * frame against 0.016 m, and the largest change with the spring 0.0825 m against a bound of
    * 0.0819 m. */
-  WindParams wind;
-  wind.speed = 3.0f;
-  wind.turbulence = 0.5f;
-  StrandParams strand_params;
-  strand_params.model = StrandModel::Kurihara1993;
-  strand_params.form_drag = 0.0f;
+  const WindParams wind = gusty_wind();
+  const StrandParams strand_params = no_jump_strands();
   float raw_jump = 0.0f;
   for (const float transition_time : {0.0f, 0.25f}) {
     LodParams params = scene_params();
@@ -479,12 +493,8 @@ TEST(LodSolver, NoJumpAfterALongInactivePeriod)
    * spring: 0.0401 m then, 0.0581 m now (see jump_slack). On the Kurihara model, as
    * NoJumpAtATransition (on the articulated model the skeletons merge back fewer times than
    * the count below asks within the frames). */
-  WindParams wind;
-  wind.speed = 3.0f;
-  wind.turbulence = 0.5f;
-  StrandParams strand_params;
-  strand_params.model = StrandModel::Kurihara1993;
-  strand_params.form_drag = 0.0f;
+  const WindParams wind = gusty_wind();
+  const StrandParams strand_params = no_jump_strands();
   const auto head_at = [](const int frame) {
     const auto ease = [](const float t) {
       const float x = std::clamp(t, 0.0f, 1.0f);

@@ -107,7 +107,7 @@ Soak soak(const StrandModel model)
  * 0.28 m/s). */
 TEST(StrandsRobustness, SurviveFiveHundredFramesOfViolentShake)
 {
-  for (const StrandModel model : {StrandModel::Kurihara1993, StrandModel::Articulated}) {
+  for (const StrandModel model : { StrandModel::Kurihara1993, StrandModel::Articulated }) {
     SCOPED_TRACE(model == StrandModel::Articulated ? "articulated" : "kurihara1993");
     const Soak result = soak(model);
     std::printf("%s: reach %.4f m, depth %.4f m, stretch %.2e, peak speed %.2f m/s, speed 48 "
