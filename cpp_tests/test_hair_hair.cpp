@@ -98,6 +98,12 @@ TEST(HairHair, GridFindsExactlyTheBruteForcePairs)
       EXPECT_LT(c.overlap, 0.0f);
     }
     EXPECT_EQ(found.size(), contacts.size()) << "a pair was reported twice";
+    EXPECT_TRUE(std::is_sorted(contacts.begin(), contacts.end(),
+                               [](const SegmentContact &a, const SegmentContact &b) {
+                                 return a.first != b.first ? a.first < b.first :
+                                                             a.second < b.second;
+                               }))
+        << "contacts come in the order of their pairs";
     const auto reference = brute_force(strands, radius, different_only);
     EXPECT_GT(reference.size(), 100u);
     EXPECT_EQ(found, reference);

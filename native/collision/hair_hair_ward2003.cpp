@@ -387,6 +387,42 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
   return true;
 }
 
+/* The chunks' contacts in the order of their pairs (first, then second point): a fixed order
+ * that depends neither on the thread count nor on the grid's layout. A counting sort by the
+ * first point, then each point's few contacts by the second. */
+void gather_in_pair_order(const int64_t points_num, SegmentGridScratch &g,
+                          std::vector<SegmentContact> &r_contacts)
+{
+  g.contact_offsets.assign(size_t(points_num) + 1, 0);
+  for (const std::vector<SegmentContact> &chunk : g.chunk_contacts) {
+    for (const SegmentContact &c : chunk) {
+      g.contact_offsets[size_t(c.first) + 1]++;
+    }
+  }
+  for (int64_t p = 0; p < points_num; p++) {
+    g.contact_offsets[size_t(p) + 1] += g.contact_offsets[size_t(p)];
+  }
+  r_contacts.resize(size_t(g.contact_offsets.back()));
+  for (const std::vector<SegmentContact> &chunk : g.chunk_contacts) {
+    for (const SegmentContact &c : chunk) {
+      r_contacts[g.contact_offsets[size_t(c.first)]++] = c;
+    }
+  }
+  uint32_t begin = 0;
+  for (int64_t p = 0; p < points_num; p++) {
+    const uint32_t end = g.contact_offsets[size_t(p)];
+    for (uint32_t i = begin + 1; i < end; i++) {
+      const SegmentContact c = r_contacts[i];
+      uint32_t j = i;
+      for (; j > begin && r_contacts[j - 1].second > c.second; j--) {
+        r_contacts[j] = r_contacts[j - 1];
+      }
+      r_contacts[j] = c;
+    }
+    begin = end;
+  }
+}
+
 }  // namespace
 
 void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> positions,
@@ -464,9 +500,7 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
       },
       [](const int64_t a, const int64_t b) { return a + b; });
   g.candidate_pairs_num = candidates;
-  for (const std::vector<SegmentContact> &chunk : g.chunk_contacts) {
-    r_contacts.insert(r_contacts.end(), chunk.begin(), chunk.end());
-  }
+  gather_in_pair_order(positions.size(), g, r_contacts);
 }
 
 int64_t count_crossings(const Span<int32_t> curve_offsets, const Span<vec3> positions,

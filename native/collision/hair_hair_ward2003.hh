@@ -63,6 +63,7 @@ struct SegmentGridScratch {
   std::vector<uint32_t> cell_offsets; /* per cell: its first entry */
   std::vector<uint32_t> chunk_counts; /* counting sort: per chunk of segments and cell */
   std::vector<std::vector<SegmentContact>> chunk_contacts;
+  std::vector<uint32_t> contact_offsets; /* per point: its first contact as `first` */
   /* The response's per-node sums of corrections and of their weights. */
   std::vector<vec4> dx, dv; /* xyz: the sum, w: the weight */
   float cell_size = 0.0f;
@@ -70,7 +71,8 @@ struct SegmentGridScratch {
 };
 
 /* Every pair of segments whose LSSs intersect at `positions` (overlap < 0), but a strand's
- * neighbouring segments, in a fixed order that does not depend on the thread count. Radii per
+ * neighbouring segments, in the order of their first, then second points (so independent of
+ * the thread count and of the grid). Radii per
  * point (a segment takes the mean of its two nodes'), or empty for default_radius everywhere.
  * With `different_strands_only`, pairs of one strand are left out too. With
  * `start_positions` (the nodes at the substep's start), also the pairs that passed through
