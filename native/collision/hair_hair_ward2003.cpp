@@ -11,14 +11,18 @@ namespace hairdyn {
 
 namespace {
 
-/* The most cells the grid may have: more than this (a groom spread far apart) and the cells
- * grow instead, so that the per-cell arrays stay small. */
-constexpr int64_t max_cells_per_segment = 4;
-/* Fixed chunks of segments for the counting sort (independent of the thread count). */
-constexpr int64_t sort_chunks_num = 8;
+/* The most cells the grid may have, per segment: more than this (a groom spread far apart)
+ * and the cells grow instead, so that the per-cell array stays small. */
+constexpr int64_t max_cells_per_segment = 1;
+/* The most segments whose box outgrows a cell (tested against the cells their box covers
+ * and against each other one by one): more, and the cells grow. */
+constexpr int64_t max_big_segments = 1024;
 /* Re-tests of the pairs found, each applying the response again to those still in contact:
  * one substep's Jacobi sweep under-resolves a node pushed by several pairs. */
 constexpr int response_iterations = 3;
+/* A segment's box is at most this share of a cell along every axis (else it is a big one):
+ * below 1, so that rounding in the cell coordinates never loses a pair. */
+constexpr float cell_fill = 0.999f;
 
 /* Where a segment's nodes were at the substep's start. */
 struct StartPositions {
@@ -35,9 +39,22 @@ struct StartPositions {
   bool sweeps() const { return !x0.is_empty() || !v.is_empty(); }
 };
 
-/* Segments, their swept boxes and cells, and the grid entries in cell order (§5.3: "insert
- * each SSV of the hair into the grids"; the cell edge is the mean segment length). Returns
- * false when there is no segment. */
+/* The grid cell holding p (clamped to the grid). */
+ivec3 cell_of(const vec3 &p, const vec3 &lo, const double inv_cell, const ivec3 &dims)
+{
+  ivec3 c;
+  for (int a = 0; a < 3; a++) {
+    c[a] = std::clamp(int(std::floor((double(p[a]) - double(lo[a])) * inv_cell)), 0, dims[a] - 1);
+  }
+  return c;
+}
+
+/* Segments, their swept boxes, and the grid (§5.3: "insert each SSV of the hair into the
+ * grids"; the cell edge is the mean segment length, or the largest box when that is more, up to
+ * twice the mean). Each segment is inserted once, in the cell of its box's lower corner: a cell
+ * at least as large as every box, two segments whose boxes overlap lie in the same or in
+ * neighbouring cells. The few boxes larger than that are listed apart. Returns false when
+ * there is no segment. */
 bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
                 const StartPositions &start, const Span<float> radii, const float default_radius,
                 SegmentGridScratch &g)
@@ -53,14 +70,13 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   g.segment_sweep.resize(size_t(segments_num));
   g.box_min.resize(size_t(segments_num));
   g.box_max.resize(size_t(segments_num));
-  g.cell_min.resize(size_t(segments_num));
-  g.cell_max.resize(size_t(segments_num));
-  g.entry_offsets.resize(size_t(segments_num) + 1);
+  g.segment_cell.resize(size_t(segments_num));
 
-  /* Boxes of the swept segments and the mean segment length. */
+  /* Boxes of the swept segments, the mean segment length and the largest box. */
   struct Bounds {
     vec3 lo{std::numeric_limits<float>::max()}, hi{-std::numeric_limits<float>::max()};
     double length = 0.0;
+    vec3 largest_box{0.0f}, box_sum{0.0f};
   };
   const Bounds bounds = parallel_reduce(
       curves_num, 256, Bounds(),
@@ -90,6 +106,9 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
             b.lo = glm::min(b.lo, g.box_min[k]);
             b.hi = glm::max(b.hi, g.box_max[k]);
             b.length += double(glm::length(e - a));
+            const vec3 size = g.box_max[k] - g.box_min[k];
+            b.largest_box = glm::max(b.largest_box, size);
+            b.box_sum += size;
           }
         }
         return b;
@@ -99,123 +118,139 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
         r.lo = glm::min(a.lo, b.lo);
         r.hi = glm::max(a.hi, b.hi);
         r.length = a.length + b.length;
+        r.largest_box = glm::max(a.largest_box, b.largest_box);
+        r.box_sum = a.box_sum + b.box_sum;
         return r;
       });
-  const vec3 extent = bounds.hi - bounds.lo;
+  /* Sweep and prune along the axis of the thinnest boxes (on average): the grid's cells are
+   * columns along it. The boxes are stored with that axis first. */
+  const int sweep_axis = bounds.box_sum.x <= bounds.box_sum.y ?
+                             (bounds.box_sum.x <= bounds.box_sum.z ? 0 : 2) :
+                             (bounds.box_sum.y <= bounds.box_sum.z ? 1 : 2);
+  const ivec3 axes = sweep_axis == 0 ? ivec3(0, 1, 2) :
+                     sweep_axis == 1 ? ivec3(1, 2, 0) :
+                                       ivec3(2, 0, 1);
+  const auto swizzle = [&](const vec3 &p) { return vec3(p[axes.x], p[axes.y], p[axes.z]); };
+  g.axes = axes;
+  parallel_for(segments_num, 4096, [&](const IndexRange range) {
+    for (int64_t k = range.start; k < range.one_after_last(); k++) {
+      g.box_min[size_t(k)] = swizzle(g.box_min[size_t(k)]);
+      g.box_max[size_t(k)] = swizzle(g.box_max[size_t(k)]);
+    }
+  });
+  const vec3 grid_lo = swizzle(bounds.lo);
+  const vec3 extent = swizzle(bounds.hi) - grid_lo;
   const float largest = std::max(extent.x, std::max(extent.y, extent.z));
-  /* §5.3: the cell edge is the mean segment length; never so small that the cells outnumber
-   * a few per segment (a groom spread far apart) or the indices overflow. */
-  float cell = float(bounds.length / double(segments_num));
+  const float mean_length = float(bounds.length / double(segments_num));
+  const auto box_size = [&](const int64_t k) {
+    const vec3 size = g.box_max[size_t(k)] - g.box_min[size_t(k)];
+    return std::max(size.y, size.z);
+  };
+  const vec3 largest_box = swizzle(bounds.largest_box);
+  const float largest_cross = std::max(largest_box.y, largest_box.z);
+  float cell = std::clamp(largest_cross, mean_length, 2.0f * mean_length) / cell_fill;
   cell = std::max({cell, largest * 1e-6f, 1e-9f});
+  if (largest_cross > cell_fill * cell) {
+    /* Too many big boxes (a fast motion): the cell grows to all but the largest few. */
+    int64_t big = 0;
+    for (int64_t k = 0; k < segments_num; k++) {
+      big += box_size(k) > cell_fill * cell ? 1 : 0;
+    }
+    if (big > max_big_segments) {
+      std::vector<float> &sizes = g.sort_scratch;
+      sizes.resize(size_t(segments_num));
+      for (int64_t k = 0; k < segments_num; k++) {
+        sizes[size_t(k)] = box_size(k);
+      }
+      std::nth_element(sizes.begin(), sizes.end() - max_big_segments - 1, sizes.end());
+      cell = std::max(cell, sizes[size_t(segments_num - max_big_segments - 1)] / cell_fill);
+    }
+  }
   ivec3 dims;
   for (;;) {
     dims = ivec3(glm::floor(extent / cell)) + ivec3(1);
+    dims.x = 1; /* columns */
     if (double(dims.x) * dims.y * dims.z <= double(max_cells_per_segment * segments_num + 4096)) {
       break;
     }
     cell *= 1.25f;
   }
   g.cell_size = cell;
-  const float inv_cell = 1.0f / cell;
+  g.dims = dims;
   const int64_t cells_num = int64_t(dims.x) * dims.y * dims.z;
+  const double inv_cell = 1.0 / double(cell);
+  const float big_size = cell_fill * cell;
 
+  /* The cell of each box's lower corner (in double: no rounding across a cell's edge), or
+   * `big_cell` for the big ones. */
+  const uint32_t big_cell = std::numeric_limits<uint32_t>::max();
   parallel_for(segments_num, 4096, [&](const IndexRange range) {
     for (int64_t k = range.start; k < range.one_after_last(); k++) {
-      const ivec3 c0 = glm::clamp(ivec3(glm::floor((g.box_min[size_t(k)] - bounds.lo) * inv_cell)),
-                                  ivec3(0), dims - 1);
-      const ivec3 c1 = glm::clamp(ivec3(glm::floor((g.box_max[size_t(k)] - bounds.lo) * inv_cell)),
-                                  ivec3(0), dims - 1);
-      g.cell_min[size_t(k)] = c0;
-      g.cell_max[size_t(k)] = c1;
-      const ivec3 n = c1 - c0 + ivec3(1);
-      g.entry_offsets[size_t(k) + 1] = n.x * n.y * n.z;
+      if (box_size(k) > big_size) {
+        g.segment_cell[size_t(k)] = big_cell;
+        continue;
+      }
+      const ivec3 c = cell_of(g.box_min[size_t(k)], grid_lo, inv_cell, dims);
+      g.segment_cell[size_t(k)] = uint32_t(c.x + dims.x * (c.y + dims.y * c.z));
     }
   });
-  g.entry_offsets[0] = 0;
+  g.grid_lo = grid_lo;
+  g.inv_cell = inv_cell;
+
+  /* Counting sort of the segments by cell, stable: a cell lists its segments in order. */
+  g.cell_offsets.assign(size_t(cells_num) + 1, 0);
+  g.big_segments.clear();
   for (int64_t k = 0; k < segments_num; k++) {
-    g.entry_offsets[size_t(k) + 1] += g.entry_offsets[size_t(k)];
-  }
-  const int64_t entries_num = g.entry_offsets.back();
-  g.entry_keys.resize(size_t(entries_num));
-  parallel_for(segments_num, 4096, [&](const IndexRange range) {
-    for (int64_t k = range.start; k < range.one_after_last(); k++) {
-      const ivec3 c0 = g.cell_min[size_t(k)], c1 = g.cell_max[size_t(k)];
-      int64_t e = g.entry_offsets[size_t(k)];
-      for (int32_t z = c0.z; z <= c1.z; z++) {
-        for (int32_t y = c0.y; y <= c1.y; y++) {
-          for (int32_t x = c0.x; x <= c1.x; x++) {
-            g.entry_keys[size_t(e++)] = uint32_t(x + dims.x * (y + dims.y * z));
-          }
-        }
-      }
+    const uint32_t c = g.segment_cell[size_t(k)];
+    if (c == big_cell) {
+      g.big_segments.push_back(int32_t(k));
     }
-  });
-
-  /* Counting sort of the entries by cell, stable (a cell lists its segments in increasing
-   * order before the sort by x below), over fixed chunks of segments. */
-  const int64_t chunk = (segments_num + sort_chunks_num - 1) / sort_chunks_num;
-  g.chunk_counts.assign(size_t(sort_chunks_num * cells_num), 0);
-  run_chunks(sort_chunks_num, [&](const int64_t ch) {
-    uint32_t *counts = &g.chunk_counts[size_t(ch * cells_num)];
-    const int64_t k_end = std::min(segments_num, (ch + 1) * chunk);
-    if (ch * chunk >= k_end) {
-      return;
-    }
-    for (int64_t e = g.entry_offsets[size_t(ch * chunk)]; e < g.entry_offsets[size_t(k_end)]; e++) {
-      counts[g.entry_keys[size_t(e)]]++;
-    }
-  });
-  g.cell_offsets.resize(size_t(cells_num) + 1);
-  uint32_t total = 0;
-  for (int64_t cell_index = 0; cell_index < cells_num; cell_index++) {
-    g.cell_offsets[size_t(cell_index)] = total;
-    for (int64_t ch = 0; ch < sort_chunks_num; ch++) {
-      uint32_t &count = g.chunk_counts[size_t(ch * cells_num + cell_index)];
-      const uint32_t n = count;
-      count = total; /* now: where chunk ch's first entry of this cell goes */
-      total += n;
+    else {
+      g.cell_offsets[size_t(c) + 1]++;
     }
   }
-  g.cell_offsets[size_t(cells_num)] = total;
-  g.entries.resize(size_t(entries_num));
-  run_chunks(sort_chunks_num, [&](const int64_t ch) {
-    uint32_t *fill = &g.chunk_counts[size_t(ch * cells_num)];
-    const int64_t k_end = std::min(segments_num, (ch + 1) * chunk);
-    for (int64_t k = ch * chunk; k < k_end; k++) {
-      const int32_t curve = g.segment_curve[size_t(k)];
-      const vec3 lo = g.box_min[size_t(k)], hi = g.box_max[size_t(k)];
-      const ivec3 c0 = g.cell_min[size_t(k)];
-      int64_t e = g.entry_offsets[size_t(k)];
-      for (int32_t z = c0.z; z <= g.cell_max[size_t(k)].z; z++) {
-        for (int32_t y = c0.y; y <= g.cell_max[size_t(k)].y; y++) {
-          for (int32_t x = c0.x; x <= g.cell_max[size_t(k)].x; x++) {
-            const uint32_t key = g.entry_keys[size_t(e++)];
-            SegmentGridScratch::Entry &entry = g.entries[fill[key]++];
-            entry.min_x = lo.x;
-            entry.max_x = hi.x;
-            entry.min_y = lo.y;
-            entry.max_y = hi.y;
-            entry.min_z = lo.z;
-            entry.max_z = hi.z;
-            entry.point = int32_t(k) + curve;
-            entry.curve_flags = uint32_t(curve) << 3 | uint32_t(x == c0.x) |
-                                uint32_t(y == c0.y) << 1 | uint32_t(z == c0.z) << 2;
-          }
-        }
-      }
+  for (int64_t c = 0; c < cells_num; c++) {
+    g.cell_offsets[size_t(c) + 1] += g.cell_offsets[size_t(c)];
+  }
+  const size_t entries_num = g.cell_offsets.back();
+  g.entry_segment.resize(entries_num);
+  g.fill.assign(g.cell_offsets.begin(), g.cell_offsets.end() - 1);
+  for (int64_t k = 0; k < segments_num; k++) {
+    const uint32_t c = g.segment_cell[size_t(k)];
+    if (c != big_cell) {
+      g.entry_segment[g.fill[c]++] = int32_t(k);
+    }
+  }
+  /* Within a column, by the lower end along the sweep axis (ties by segment). */
+  parallel_for(cells_num, 64, [&](const IndexRange range) {
+    for (int64_t c = range.start; c < range.one_after_last(); c++) {
+      const uint32_t begin = g.cell_offsets[size_t(c)], end = g.cell_offsets[size_t(c) + 1];
+      std::sort(g.entry_segment.begin() + begin, g.entry_segment.begin() + end,
+                [&](const int32_t a, const int32_t b) {
+                  const float la = g.box_min[size_t(a)].x, lb = g.box_min[size_t(b)].x;
+                  return la < lb || (la == lb && a < b);
+                });
     }
   });
-  /* Within a cell, by the lower x of the boxes (sweep and prune along x; ties by point). */
-  parallel_for(cells_num, 1024, [&](const IndexRange range) {
-    for (int64_t cell_index = range.start; cell_index < range.one_after_last(); cell_index++) {
-      const uint32_t begin = g.cell_offsets[size_t(cell_index)];
-      const uint32_t end = g.cell_offsets[size_t(cell_index) + 1];
-      if (end - begin > 1) {
-        std::sort(g.entries.begin() + begin, g.entries.begin() + end,
-                  [](const SegmentGridScratch::Entry &a, const SegmentGridScratch::Entry &b) {
-                    return a.min_x < b.min_x || (a.min_x == b.min_x && a.point < b.point);
-                  });
-      }
+  for (std::vector<float> *values : {&g.lo_x, &g.hi_x, &g.lo_y, &g.hi_y, &g.lo_z, &g.hi_z}) {
+    values->resize(entries_num);
+  }
+  g.entry_point.resize(entries_num);
+  g.entry_curve.resize(entries_num);
+  g.entry_sweep.resize(entries_num);
+  parallel_for(int64_t(entries_num), 4096, [&](const IndexRange range) {
+    for (int64_t e = range.start; e < range.one_after_last(); e++) {
+      const size_t k = size_t(g.entry_segment[size_t(e)]);
+      const vec3 lo = g.box_min[k], hi = g.box_max[k];
+      g.lo_x[size_t(e)] = lo.x;
+      g.hi_x[size_t(e)] = hi.x;
+      g.lo_y[size_t(e)] = lo.y;
+      g.hi_y[size_t(e)] = hi.y;
+      g.lo_z[size_t(e)] = lo.z;
+      g.hi_z[size_t(e)] = hi.z;
+      g.entry_curve[size_t(e)] = g.segment_curve[k];
+      g.entry_point[size_t(e)] = int32_t(k) + g.segment_curve[k];
+      g.entry_sweep[size_t(e)] = g.segment_sweep[k];
     }
   });
   return true;
@@ -448,49 +483,126 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
   if (!build_grid(curve_offsets, positions, ctx.start, radii, default_radius, g)) {
     return;
   }
-  const int64_t cells_num = int64_t(g.cell_offsets.size()) - 1;
-  /* Fixed chunks of cells (independent of the thread count), each with its own list. */
-  const int64_t grain = std::max<int64_t>(cells_num / 256, 16);
-  const int64_t chunks_num = (cells_num + grain - 1) / grain;
-  g.chunk_contacts.resize(size_t(chunks_num));
+  const ivec3 dims = g.dims;
+  const int64_t cells_num = int64_t(dims.x) * dims.y * dims.z;
+  const auto cell_index = [&](const int32_t x, const int32_t y, const int32_t z) {
+    return size_t(x) + size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z));
+  };
+  /* A pair whose boxes overlap: tested unless they are neighbours on one strand (or of one
+   * strand at all, with different_strands_only). */
+  const auto test = [&](const int32_t point_a, const int32_t curve_a, const float sweep_a,
+                        const int32_t point_b, const int32_t curve_b, const float sweep_b,
+                        std::vector<SegmentContact> &out) {
+    const int32_t pi = std::min(point_a, point_b), pj = std::max(point_a, point_b);
+    if (curve_a == curve_b && (different_strands_only || pj - pi <= 1)) {
+      return int64_t(0);
+    }
+    SegmentContact contact;
+    if (test_pair(ctx, pi, pj, sweep_a + sweep_b, contact)) {
+      out.push_back(contact);
+    }
+    return int64_t(1);
+  };
+  /* Tests segment a's box against the grid entries [begin, end). */
+  const auto test_entries = [&](const vec3 &lo, const vec3 &hi, const int32_t point,
+                                const int32_t curve, const float sweep, const uint32_t begin,
+                                const uint32_t end, std::vector<SegmentContact> &out) {
+    int64_t tested = 0;
+    for (uint32_t f = begin; f < end; f++) {
+      if (g.lo_x[f] > hi.x || g.hi_x[f] < lo.x || g.lo_y[f] > hi.y || g.hi_y[f] < lo.y ||
+          g.lo_z[f] > hi.z || g.hi_z[f] < lo.z)
+      {
+        continue;
+      }
+      tested += test(point, curve, sweep, g.entry_point[f], g.entry_curve[f], g.entry_sweep[f],
+                     out);
+    }
+    return tested;
+  };
+  /* Fixed chunks of columns (independent of the thread count), each with its own list, then
+   * one chunk per big segment. */
+  const int64_t grain = std::max<int64_t>(cells_num / 256, 1);
+  const int64_t cell_chunks_num = (cells_num + grain - 1) / grain;
+  const int64_t big_num = int64_t(g.big_segments.size());
+  g.chunk_contacts.resize(size_t(cell_chunks_num + big_num));
   const int64_t candidates = parallel_reduce(
-      chunks_num, 1, int64_t(0),
+      cell_chunks_num + big_num, 1, int64_t(0),
       [&](const IndexRange chunks) {
         int64_t tested = 0;
         for (int64_t chunk = chunks.start; chunk < chunks.one_after_last(); chunk++) {
           std::vector<SegmentContact> &out = g.chunk_contacts[size_t(chunk)];
           out.clear();
+          if (chunk >= cell_chunks_num) {
+            /* A big segment: against every entry of the cells its box covers, widened by one
+             * cell downwards (the entries there reach a cell up), and the big ones after it. */
+            const size_t k = size_t(g.big_segments[size_t(chunk - cell_chunks_num)]);
+            const vec3 lo = g.box_min[k], hi = g.box_max[k];
+            const int32_t curve = g.segment_curve[k], point = int32_t(k) + curve;
+            const float sweep = g.segment_sweep[k];
+            const ivec3 c0 = glm::max(cell_of(lo, g.grid_lo, g.inv_cell, dims) - 1, ivec3(0));
+            const ivec3 c1 = cell_of(hi, g.grid_lo, g.inv_cell, dims);
+            for (int32_t z = c0.z; z <= c1.z; z++) {
+              for (int32_t y = c0.y; y <= c1.y; y++) {
+                const size_t column = cell_index(0, y, z);
+                const uint32_t begin = g.cell_offsets[column];
+                const uint32_t end = uint32_t(
+                    std::upper_bound(g.lo_x.begin() + begin,
+                                     g.lo_x.begin() + g.cell_offsets[column + 1], hi.x) -
+                    g.lo_x.begin());
+                tested += test_entries(lo, hi, point, curve, sweep, begin, end, out);
+              }
+            }
+            for (int64_t i = chunk - cell_chunks_num + 1; i < big_num; i++) {
+              const size_t m = size_t(g.big_segments[size_t(i)]);
+              if (glm::any(glm::greaterThan(g.box_min[m], hi)) ||
+                  glm::any(glm::lessThan(g.box_max[m], lo)))
+              {
+                continue;
+              }
+              tested += test(point, curve, sweep, int32_t(m) + g.segment_curve[m],
+                             g.segment_curve[m], g.segment_sweep[m], out);
+            }
+            continue;
+          }
           const int64_t c_end = std::min(cells_num, (chunk + 1) * grain);
           for (int64_t c = chunk * grain; c < c_end; c++) {
             const uint32_t begin = g.cell_offsets[size_t(c)], end = g.cell_offsets[size_t(c) + 1];
-            for (uint32_t e = begin; e + 1 < end; e++) {
-              const SegmentGridScratch::Entry a = g.entries[e];
-              for (uint32_t f = e + 1; f < end; f++) {
-                const SegmentGridScratch::Entry &b = g.entries[f];
-                if (b.min_x > a.max_x) {
-                  break;
-                }
-                if (a.max_y < b.min_y || b.max_y < a.min_y || a.max_z < b.min_z ||
-                    b.max_z < a.min_z)
+            if (begin == end) {
+              continue;
+            }
+            /* Sweep and prune along the column, against this and the 8 columns around: a
+             * segment meets those that start after it (ties by point) before its end. */
+            const int32_t y = int32_t(c % dims.y), z = int32_t(c / dims.y);
+            uint32_t next[9], stop[9];
+            int columns_num = 0;
+            for (int32_t zz = std::max(z - 1, 0); zz <= std::min(z + 1, dims.z - 1); zz++) {
+              for (int32_t yy = std::max(y - 1, 0); yy <= std::min(y + 1, dims.y - 1); yy++) {
+                next[columns_num] = g.cell_offsets[cell_index(0, yy, zz)];
+                stop[columns_num] = g.cell_offsets[cell_index(0, yy, zz) + 1];
+                columns_num++;
+              }
+            }
+            for (uint32_t e = begin; e < end; e++) {
+              const float lo_x = g.lo_x[e], hi_x = g.hi_x[e];
+              const float lo_y = g.lo_y[e], hi_y = g.hi_y[e], lo_z = g.lo_z[e], hi_z = g.hi_z[e];
+              const int32_t point = g.entry_point[e], curve = g.entry_curve[e];
+              const float sweep = g.entry_sweep[e];
+              for (int n = 0; n < columns_num; n++) {
+                uint32_t f = next[n];
+                while (f < stop[n] &&
+                       (g.lo_x[f] < lo_x || (g.lo_x[f] == lo_x && g.entry_point[f] <= point)))
                 {
-                  continue;
+                  f++;
                 }
-                /* Each pair once: in the first cell both touch (along every axis, this cell
-                 * is the first of one of them). */
-                if (((a.curve_flags | b.curve_flags) & 7u) != 7u) {
-                  continue;
-                }
-                const bool same_curve = (a.curve_flags >> 3) == (b.curve_flags >> 3);
-                const int32_t pi = std::min(a.point, b.point), pj = std::max(a.point, b.point);
-                if (same_curve && (different_strands_only || pj - pi <= 1)) {
-                  continue;
-                }
-                tested++;
-                SegmentContact contact;
-                const float sweeps = g.segment_sweep[size_t(a.point - int32_t(a.curve_flags >> 3))] +
-                                     g.segment_sweep[size_t(b.point - int32_t(b.curve_flags >> 3))];
-                if (test_pair(ctx, pi, pj, sweeps, contact)) {
-                  out.push_back(contact);
+                next[n] = f;
+                for (; f < stop[n] && g.lo_x[f] <= hi_x; f++) {
+                  if (g.lo_y[f] > hi_y || g.hi_y[f] < lo_y || g.lo_z[f] > hi_z ||
+                      g.hi_z[f] < lo_z)
+                  {
+                    continue;
+                  }
+                  tested += test(point, curve, sweep, g.entry_point[f], g.entry_curve[f],
+                                 g.entry_sweep[f], out);
                 }
               }
             }

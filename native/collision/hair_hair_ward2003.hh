@@ -2,8 +2,9 @@
 /* Hair–hair collision of Ward & Lin 2003 §5.3 as a substep pass.
  *
  * Every strand segment is a line swept sphere (LSS) whose radius is the strand's thickness
- * (§5.2). The SSVs are inserted into a uniform grid whose cell edge is the mean segment length,
- * each into every cell its bounding box touches; only segments sharing a cell are tested: the
+ * (§5.2). The SSVs are inserted into a uniform grid whose cell edge is the mean segment length
+ * (or the largest bounding box, up to twice that), each once, in the cell of its box's lower
+ * corner; only segments in the same or neighbouring cells whose boxes overlap are tested: the
  * distance d between their cores minus their radii,
  *
  *   overlap = d − (r1 + r2),                                   (§5.3)
@@ -50,24 +51,28 @@ struct SegmentGridScratch {
   std::vector<int32_t> segment_curve;
   std::vector<float> segment_sweep; /* m, the farthest one of its nodes moved in the substep */
   std::vector<vec3> box_min, box_max; /* its swept LSS's bounding box, start and end */
-  std::vector<ivec3> cell_min, cell_max;
-  std::vector<int32_t> entry_offsets; /* its first grid entry */
-  /* The grid entries, cell by cell (cells in linear order), within a cell by box_min.x. */
-  struct Entry {
-    float min_x, max_x, min_y, max_y, min_z, max_z; /* the segment's box */
-    int32_t point;                                 /* its first point */
-    uint32_t curve_flags; /* strand << 3 | bit a set when this cell is its first along axis a */
-  };
-  std::vector<Entry> entries;
-  std::vector<uint32_t> entry_keys;   /* per entry in segment order: its cell's linear index */
-  std::vector<uint32_t> cell_offsets; /* per cell: its first entry */
-  std::vector<uint32_t> chunk_counts; /* counting sort: per chunk of segments and cell */
+  std::vector<uint32_t> segment_cell; /* the cell of its box's lower corner (linear index) */
+  /* The grid: one entry per segment but the big ones, cell by cell (cells in linear order),
+   * within a cell in segment order; a cell's neighbours along x follow it. */
+  std::vector<float> lo_x, hi_x, lo_y, hi_y, lo_z, hi_z; /* the segment's box */
+  std::vector<int32_t> entry_point;                      /* its first point */
+  std::vector<int32_t> entry_curve;                      /* its strand */
+  std::vector<float> entry_sweep;                        /* its segment_sweep */
+  std::vector<uint32_t> cell_offsets;                    /* per cell: its first entry */
+  std::vector<uint32_t> fill;
+  std::vector<int32_t> entry_segment; /* per entry: its segment */
+  std::vector<int32_t> big_segments; /* segments whose box is larger than a cell */
+  std::vector<float> sort_scratch;
   std::vector<std::vector<SegmentContact>> chunk_contacts;
   std::vector<uint32_t> contact_offsets; /* per point: its first contact as `first` */
   /* The response's per-node sums of corrections and of their weights. */
   std::vector<vec4> dx, dv; /* xyz: the sum, w: the weight */
   float cell_size = 0.0f;
-  int64_t candidate_pairs_num = 0; /* pairs sharing a cell whose boxes overlap */
+  ivec3 dims{0};
+  ivec3 axes{0, 1, 2}; /* the boxes' (and the grid's) axes: the sweep axis first */
+  vec3 grid_lo{0.0f};
+  double inv_cell = 0.0;
+  int64_t candidate_pairs_num = 0; /* pairs of segments whose boxes overlap, tested */
 };
 
 /* Every pair of segments whose LSSs intersect at `positions` (overlap < 0), but a strand's
