@@ -112,7 +112,9 @@ static void BM_HairHairSubstep(benchmark::State &state)
   state.counters["crossed"] = double(stats.crossed_num);
   state.counters["pairs"] = double(stats.pairs_num);
   state.counters["candidates"] = double(stats.candidates_num);
-  state.counters["cell_mm"] = 1e3 * double(scratch.cell_size);
+  /* The grid's cells across its columns. */
+  state.counters["cell_u_mm"] = 1e3 * double(scratch.cell_size.y);
+  state.counters["cell_v_mm"] = 1e3 * double(scratch.cell_size.z);
   set_thread_num(0);
 }
 BENCHMARK(BM_HairHairSubstep)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();

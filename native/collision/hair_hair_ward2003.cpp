@@ -4,6 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#if defined(__SSE2__)
+#  include <emmintrin.h>
+#endif
 
 #include "core/parallel.hh"
 
@@ -39,12 +42,69 @@ struct StartPositions {
   bool sweeps() const { return !x0.is_empty() || !v.is_empty(); }
 };
 
+/* Whether two boxes overlap across the column axes: one's (lo y, lo z, −hi y, −hi z) against
+ * the other's (hi y, hi z, −lo y, −lo z). */
+inline bool boxes_meet(const vec4 &box, const vec4 &cross)
+{
+#if defined(__SSE2__)
+  return _mm_movemask_ps(_mm_cmple_ps(_mm_loadu_ps(&box.x), _mm_loadu_ps(&cross.x))) == 15;
+#else
+  return box.x <= cross.x && box.y <= cross.y && box.z <= cross.z && box.w <= cross.w;
+#endif
+}
+
+/* test_pair's rejections, from the grid's copies of the two segments (they lie near each
+ * other in memory, where the nodes of two strands do not), with a little slack for rounding:
+ * true when test_pair would find neither an overlap at the end of the substep nor a crossing
+ * during it. Pairs near the edge of a criterion are left to test_pair. */
+inline bool cannot_touch(const SegmentGridScratch::Segment &a,
+                         const SegmentGridScratch::Segment &b, const float sin_parallel2,
+                         const bool sweeps)
+{
+  const vec3 da(a.direction), db(b.direction);
+  const vec3 n1 = glm::cross(da, db);
+  const float nn1 = glm::dot(n1, n1);
+  const float parallel_limit = sin_parallel2 * (a.direction.w * b.direction.w);
+  const float radii_sum = 1.001f * (a.origin.w + b.origin.w);
+  const vec3 w = vec3(b.origin) - vec3(a.origin);
+  if (nn1 > 1.001f * parallel_limit) {
+    /* Not near parallel: the lines' distance bounds the segments' from below; they crossed
+     * only if b's side of a's line flipped. */
+    const float f1 = glm::dot(w, n1);
+    if (f1 * f1 <= radii_sum * radii_sum * nn1) {
+      return false;
+    }
+    if (!sweeps) {
+      return true;
+    }
+    const vec3 n0 = glm::cross(vec3(a.start_direction), vec3(b.start_direction));
+    const vec3 w0 = vec3(b.start_origin) - vec3(a.start_origin);
+    const float side0 = glm::dot(w0, n0);
+    return (side0 > 0.0f) == (f1 > 0.0f) &&
+           side0 * side0 > 1e-8f * glm::dot(w0, w0) * glm::dot(n0, n0);
+  }
+  if (nn1 < 0.999f * parallel_limit && a.direction.w > 0.0f) {
+    /* Near parallel: b's projection onto the plane normal to a, seen from a's first node,
+     * bounds the segments' distance from below. */
+    const float aa = a.direction.w;
+    const vec3 w1 = w + db;
+    const vec3 q0 = w - (glm::dot(w, da) / aa) * da, q1 = w1 - (glm::dot(w1, da) / aa) * da;
+    const vec3 dq = q1 - q0;
+    const float qq = glm::dot(dq, dq);
+    const float u = qq > 0.0f ? glm::clamp(-glm::dot(q0, dq) / qq, 0.0f, 1.0f) : 0.0f;
+    const vec3 closest = q0 + u * dq;
+    return glm::dot(closest, closest) >= radii_sum * radii_sum;
+  }
+  return false;
+}
+
 /* The grid cell holding p (clamped to the grid). */
-ivec3 cell_of(const vec3 &p, const vec3 &lo, const double inv_cell, const ivec3 &dims)
+ivec3 cell_of(const vec3 &p, const vec3 &lo, const glm::dvec3 &inv_cell, const ivec3 &dims)
 {
   ivec3 c;
   for (int a = 0; a < 3; a++) {
-    c[a] = std::clamp(int(std::floor((double(p[a]) - double(lo[a])) * inv_cell)), 0, dims[a] - 1);
+    c[a] = std::clamp(int(std::floor((double(p[a]) - double(lo[a])) * inv_cell[a])), 0,
+                      dims[a] - 1);
   }
   return c;
 }
@@ -71,6 +131,7 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   g.box_min.resize(size_t(segments_num));
   g.box_max.resize(size_t(segments_num));
   g.segment_cell.resize(size_t(segments_num));
+
 
   /* Boxes of the swept segments, the mean segment length and the largest box. */
   struct Bounds {
@@ -136,57 +197,65 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
     for (int64_t k = range.start; k < range.one_after_last(); k++) {
       g.box_min[size_t(k)] = swizzle(g.box_min[size_t(k)]);
       g.box_max[size_t(k)] = swizzle(g.box_max[size_t(k)]);
+
     }
   });
   const vec3 grid_lo = swizzle(bounds.lo);
   const vec3 extent = swizzle(bounds.hi) - grid_lo;
   const float largest = std::max(extent.x, std::max(extent.y, extent.z));
   const float mean_length = float(bounds.length / double(segments_num));
-  const auto box_size = [&](const int64_t k) {
-    const vec3 size = g.box_max[size_t(k)] - g.box_min[size_t(k)];
-    return std::max(size.y, size.z);
-  };
+  /* Across the columns, a cell is as large as the largest box along each axis (up to twice
+   * the mean segment length; the boxes larger than that are listed apart, as big ones). */
   const vec3 largest_box = swizzle(bounds.largest_box);
-  const float largest_cross = std::max(largest_box.y, largest_box.z);
-  float cell = std::clamp(largest_cross, mean_length, 2.0f * mean_length) / cell_fill;
-  cell = std::max({cell, largest * 1e-6f, 1e-9f});
-  if (largest_cross > cell_fill * cell) {
-    /* Too many big boxes (a fast motion): the cell grows to all but the largest few. */
+  vec3 cell;
+  for (int a = 1; a < 3; a++) {
+    cell[a] = std::max({std::min(largest_box[a], 2.0f * mean_length) / cell_fill,
+                        largest * 1e-6f, 1e-9f});
+  }
+  const auto is_big = [&](const int64_t k) {
+    const vec3 size = g.box_max[size_t(k)] - g.box_min[size_t(k)];
+    return size.y > cell_fill * cell.y || size.z > cell_fill * cell.z;
+  };
+  if (largest_box.y > cell_fill * cell.y || largest_box.z > cell_fill * cell.z) {
+    /* Too many big boxes (a fast motion): the cells grow to all but the largest few. */
     int64_t big = 0;
     for (int64_t k = 0; k < segments_num; k++) {
-      big += box_size(k) > cell_fill * cell ? 1 : 0;
+      big += is_big(k) ? 1 : 0;
     }
     if (big > max_big_segments) {
       std::vector<float> &sizes = g.sort_scratch;
       sizes.resize(size_t(segments_num));
-      for (int64_t k = 0; k < segments_num; k++) {
-        sizes[size_t(k)] = box_size(k);
+      for (int a = 1; a < 3; a++) {
+        for (int64_t k = 0; k < segments_num; k++) {
+          sizes[size_t(k)] = g.box_max[size_t(k)][a] - g.box_min[size_t(k)][a];
+        }
+        const auto rank = sizes.end() - max_big_segments / 2 - 1;
+        std::nth_element(sizes.begin(), rank, sizes.end());
+        cell[a] = std::max(cell[a], *rank / cell_fill);
       }
-      std::nth_element(sizes.begin(), sizes.end() - max_big_segments - 1, sizes.end());
-      cell = std::max(cell, sizes[size_t(segments_num - max_big_segments - 1)] / cell_fill);
     }
   }
   ivec3 dims;
   for (;;) {
     dims = ivec3(glm::floor(extent / cell)) + ivec3(1);
     dims.x = 1; /* columns */
-    if (double(dims.x) * dims.y * dims.z <= double(max_cells_per_segment * segments_num + 4096)) {
+    if (double(dims.y) * dims.z <= double(max_cells_per_segment * segments_num + 4096)) {
       break;
     }
     cell *= 1.25f;
   }
+  cell.x = 0.0f;
   g.cell_size = cell;
   g.dims = dims;
   const int64_t cells_num = int64_t(dims.x) * dims.y * dims.z;
-  const double inv_cell = 1.0 / double(cell);
-  const float big_size = cell_fill * cell;
+  const glm::dvec3 inv_cell(0.0, 1.0 / double(cell.y), 1.0 / double(cell.z));
 
   /* The cell of each box's lower corner (in double: no rounding across a cell's edge), or
    * `big_cell` for the big ones. */
   const uint32_t big_cell = std::numeric_limits<uint32_t>::max();
   parallel_for(segments_num, 4096, [&](const IndexRange range) {
     for (int64_t k = range.start; k < range.one_after_last(); k++) {
-      if (box_size(k) > big_size) {
+      if (is_big(k)) {
         g.segment_cell[size_t(k)] = big_cell;
         continue;
       }
@@ -232,9 +301,10 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
                 });
     }
   });
-  for (std::vector<float> *values : {&g.lo_x, &g.hi_x, &g.lo_y, &g.hi_y, &g.lo_z, &g.hi_z}) {
-    values->resize(entries_num);
-  }
+  g.lo_x.resize(entries_num);
+  g.hi_x.resize(entries_num);
+  g.cross_box.resize(entries_num);
+  g.entry_segments.resize(entries_num);
   g.entry_point.resize(entries_num);
   g.entry_curve.resize(entries_num);
   g.entry_sweep.resize(entries_num);
@@ -244,10 +314,16 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
       const vec3 lo = g.box_min[k], hi = g.box_max[k];
       g.lo_x[size_t(e)] = lo.x;
       g.hi_x[size_t(e)] = hi.x;
-      g.lo_y[size_t(e)] = lo.y;
-      g.hi_y[size_t(e)] = hi.y;
-      g.lo_z[size_t(e)] = lo.z;
-      g.hi_z[size_t(e)] = hi.z;
+      g.cross_box[size_t(e)] = vec4(lo.y, lo.z, -hi.y, -hi.z);
+      const int32_t p = int32_t(k) + g.segment_curve[k];
+      SegmentGridScratch::Segment &segment = g.entry_segments[size_t(e)];
+      const vec3 da = positions[p + 1] - positions[p];
+      segment.origin = vec4(positions[p], radii.is_empty() ? default_radius :
+                                                             0.5f * (radii[p] + radii[p + 1]));
+      segment.direction = vec4(da, glm::dot(da, da));
+      const vec3 start0 = start[p], start1 = start[p + 1];
+      segment.start_origin = vec4(start0, 0.0f);
+      segment.start_direction = vec4(start1 - start0, 0.0f);
       g.entry_curve[size_t(e)] = g.segment_curve[k];
       g.entry_point[size_t(e)] = int32_t(k) + g.segment_curve[k];
       g.entry_sweep[size_t(e)] = g.segment_sweep[k];
@@ -504,14 +580,13 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
     return int64_t(1);
   };
   /* Tests segment a's box against the grid entries [begin, end). */
-  const auto test_entries = [&](const vec3 &lo, const vec3 &hi, const int32_t point,
-                                const int32_t curve, const float sweep, const uint32_t begin,
-                                const uint32_t end, std::vector<SegmentContact> &out) {
+  const auto test_entries = [&](const vec3 &lo, const vec3 &hi, const int32_t point, const int32_t curve, const float sweep,
+                                const uint32_t begin, const uint32_t end,
+                                std::vector<SegmentContact> &out) {
+    const vec4 cross(hi.y, hi.z, -lo.y, -lo.z);
     int64_t tested = 0;
     for (uint32_t f = begin; f < end; f++) {
-      if (g.lo_x[f] > hi.x || g.hi_x[f] < lo.x || g.lo_y[f] > hi.y || g.hi_y[f] < lo.y ||
-          g.lo_z[f] > hi.z || g.hi_z[f] < lo.z)
-      {
+      if (g.lo_x[f] > hi.x || g.hi_x[f] < lo.x || !boxes_meet(g.cross_box[f], cross)) {
         continue;
       }
       tested += test(point, curve, sweep, g.entry_point[f], g.entry_curve[f], g.entry_sweep[f],
@@ -524,6 +599,13 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
   const int64_t grain = std::max<int64_t>(cells_num / 256, 1);
   const int64_t cell_chunks_num = (cells_num + grain - 1) / grain;
   const int64_t big_num = int64_t(g.big_segments.size());
+  const float sin_parallel2 = ctx.sin_parallel * ctx.sin_parallel;
+  const bool sweeps = ctx.start.sweeps();
+  const float *lo_x = g.lo_x.data(), *hi_x = g.hi_x.data();
+  const vec4 *cross_box = g.cross_box.data();
+  const SegmentGridScratch::Segment *segments = g.entry_segments.data();
+  const int32_t *entry_point = g.entry_point.data(), *entry_curve = g.entry_curve.data();
+  const float *entry_sweep = g.entry_sweep.data();
   g.chunk_contacts.resize(size_t(cell_chunks_num + big_num));
   const int64_t candidates = parallel_reduce(
       cell_chunks_num + big_num, 1, int64_t(0),
@@ -570,39 +652,55 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
             if (begin == end) {
               continue;
             }
-            /* Sweep and prune along the column, against this and the 8 columns around: a
-             * segment meets those that start after it (ties by point) before its end. */
+            /* Sweep and prune along the column, against this one and those around that the
+             * segment's box reaches (a box lower than this one's by up to a cell may meet it):
+             * a segment meets those that start after it (ties by point) before its end. */
             const int32_t y = int32_t(c % dims.y), z = int32_t(c / dims.y);
             uint32_t next[9], stop[9];
-            int columns_num = 0;
-            for (int32_t zz = std::max(z - 1, 0); zz <= std::min(z + 1, dims.z - 1); zz++) {
-              for (int32_t yy = std::max(y - 1, 0); yy <= std::min(y + 1, dims.y - 1); yy++) {
-                next[columns_num] = g.cell_offsets[cell_index(0, yy, zz)];
-                stop[columns_num] = g.cell_offsets[cell_index(0, yy, zz) + 1];
-                columns_num++;
+            for (int n = 0; n < 9; n++) {
+              const int32_t yy = y + n % 3 - 1, zz = z + n / 3 - 1;
+              if (yy < 0 || yy >= dims.y || zz < 0 || zz >= dims.z) {
+                next[n] = stop[n] = 0;
+                continue;
               }
+              next[n] = g.cell_offsets[cell_index(0, yy, zz)];
+              stop[n] = g.cell_offsets[cell_index(0, yy, zz) + 1];
             }
             for (uint32_t e = begin; e < end; e++) {
-              const float lo_x = g.lo_x[e], hi_x = g.hi_x[e];
-              const float lo_y = g.lo_y[e], hi_y = g.hi_y[e], lo_z = g.lo_z[e], hi_z = g.hi_z[e];
-              const int32_t point = g.entry_point[e], curve = g.entry_curve[e];
-              const float sweep = g.entry_sweep[e];
-              for (int n = 0; n < columns_num; n++) {
-                uint32_t f = next[n];
-                while (f < stop[n] &&
-                       (g.lo_x[f] < lo_x || (g.lo_x[f] == lo_x && g.entry_point[f] <= point)))
-                {
-                  f++;
-                }
-                next[n] = f;
-                for (; f < stop[n] && g.lo_x[f] <= hi_x; f++) {
-                  if (g.lo_y[f] > hi_y || g.hi_y[f] < lo_y || g.lo_z[f] > hi_z ||
-                      g.hi_z[f] < lo_z)
-                  {
-                    continue;
+              const float lo = lo_x[e], hi = hi_x[e];
+              const vec4 box = cross_box[e];
+              const vec4 cross(-box.z, -box.w, -box.x, -box.y); /* (hi y, hi z, −lo y, −lo z) */
+              const ivec3 reach = cell_of(vec3(hi, cross.x, cross.y), g.grid_lo, g.inv_cell,
+                                          dims);
+              const int n_y = reach.y > y ? 3 : 2, n_z = reach.z > z ? 3 : 2;
+              const SegmentGridScratch::Segment segment = segments[e];
+              const int32_t point = entry_point[e], curve = entry_curve[e];
+              const float sweep = entry_sweep[e];
+              for (int dz = 0; dz < n_z; dz++) {
+                for (int dy = 0; dy < n_y; dy++) {
+                  const int n = dz * 3 + dy;
+                  uint32_t f = next[n];
+                  const uint32_t f_stop = stop[n];
+                  while (f < f_stop &&
+                         (lo_x[f] < lo || (lo_x[f] == lo && entry_point[f] <= point))) {
+                    f++;
                   }
-                  tested += test(point, curve, sweep, g.entry_point[f], g.entry_curve[f],
-                                 g.entry_sweep[f], out);
+                  next[n] = f;
+                  for (; f < f_stop && lo_x[f] <= hi; f++) {
+                    if (!boxes_meet(cross_box[f], cross)) {
+                      continue;
+                    }
+                    if (cannot_touch(segment, segments[f], sin_parallel2, sweeps)) {
+                      tested += curve != entry_curve[f] ||
+                                        (!different_strands_only &&
+                                         std::abs(point - entry_point[f]) > 1) ?
+                                    1 :
+                                    0;
+                      continue;
+                    }
+                    tested += test(point, curve, sweep, entry_point[f], entry_curve[f],
+                                   entry_sweep[f], out);
+                  }
                 }
               }
             }

@@ -54,7 +54,15 @@ struct SegmentGridScratch {
   std::vector<uint32_t> segment_cell; /* the cell of its box's lower corner (linear index) */
   /* The grid: one entry per segment but the big ones, cell by cell (cells in linear order),
    * within a cell in segment order; a cell's neighbours along x follow it. */
-  std::vector<float> lo_x, hi_x, lo_y, hi_y, lo_z, hi_z; /* the segment's box */
+  std::vector<float> lo_x, hi_x;  /* its box along the sweep axis */
+  std::vector<vec4> cross_box;    /* and across it: (lo y, lo z, −hi y, −hi z) */
+  struct Segment {
+    vec4 origin;          /* its first node at the end of the substep, and its LSS radius */
+    vec4 direction;       /* its second node minus its first, and its length² */
+    vec4 start_origin;    /* its first node at the substep's start */
+    vec4 start_direction; /* its second node minus its first there */
+  };
+  std::vector<Segment> entry_segments; /* its copy */
   std::vector<int32_t> entry_point;                      /* its first point */
   std::vector<int32_t> entry_curve;                      /* its strand */
   std::vector<float> entry_sweep;                        /* its segment_sweep */
@@ -67,12 +75,12 @@ struct SegmentGridScratch {
   std::vector<uint32_t> contact_offsets; /* per point: its first contact as `first` */
   /* The response's per-node sums of corrections and of their weights. */
   std::vector<vec4> dx, dv; /* xyz: the sum, w: the weight */
-  float cell_size = 0.0f;
+  vec3 cell_size{0.0f}; /* across the columns (along the sweep axis: 0) */
   ivec3 dims{0};
   ivec3 axes{0, 1, 2}; /* the boxes' (and the grid's) axes: the sweep axis first */
   vec3 grid_lo{0.0f};
-  double inv_cell = 0.0;
-  int64_t candidate_pairs_num = 0; /* pairs of segments whose boxes overlap, tested */
+  glm::dvec3 inv_cell{0.0};
+  int64_t candidate_pairs_num = 0; /* pairs whose boxes and bounding spheres overlap, tested */
 };
 
 /* Every pair of segments whose LSSs intersect at `positions` (overlap < 0), but a strand's
