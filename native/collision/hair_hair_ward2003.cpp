@@ -822,6 +822,8 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
               return tested_hits;
             };
 #endif
+            const float *const lo_x_local = lo_x;
+            const vec4 *const cross_box_local = cross_box;
             for (uint32_t e = begin; e < end; e++) {
               const float lo = lo_x[e], hi = hi_x[e];
               const int32_t point = entry_point[e];
@@ -843,19 +845,22 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                     f++;
                   }
                   next[n] = f;
-                  for (; f < f_stop && lo_x[f] <= hi; f++) {
-                    if (!boxes_meet(cross_box[f], cross)) {
-                      continue;
-                    }
+                  const float *const column_lo = lo_x_local;
+                  const vec4 *const column_box = cross_box_local;
+                  for (; f < f_stop && column_lo[f] <= hi; f++) {
 #if defined(__SSE2__)
-                    hits[hits_num++] = f;
+                    /* Branch-free: the hit is kept when the boxes meet. */
+                    hits[hits_num] = f;
+                    hits_num += boxes_meet(column_box[f], cross) ? 1 : 0;
                     if (hits_num == 4) {
                       tested += test_hits(e, 4);
                       hits_num = 0;
                     }
 #else
-                    tested += test_hit(
-                        e, f, cannot_touch(segment, segments[f], sin_parallel2, sweeps), out);
+                    if (boxes_meet(column_box[f], cross)) {
+                      tested += test_hit(
+                          e, f, cannot_touch(segment, segments[f], sin_parallel2, sweeps), out);
+                    }
 #endif
                   }
                 }
