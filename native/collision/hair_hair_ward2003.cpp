@@ -62,10 +62,10 @@ inline bool cannot_touch(const SegmentGridScratch::Segment &a,
                          const SegmentGridScratch::Segment &b, const float sin_parallel2,
                          const bool sweeps)
 {
-  const vec3 da(a.direction), db(b.direction);
+  const vec3 da = vec3(a.tip) - vec3(a.origin), db = vec3(b.tip) - vec3(b.origin);
   const vec3 n1 = glm::cross(da, db);
   const float nn1 = glm::dot(n1, n1);
-  const float parallel_limit = sin_parallel2 * (a.direction.w * b.direction.w);
+  const float parallel_limit = sin_parallel2 * (a.tip.w * b.tip.w);
   const float radii_sum = 1.001f * (a.origin.w + b.origin.w);
   const vec3 w = vec3(b.origin) - vec3(a.origin);
   if (nn1 > 1.001f * parallel_limit) {
@@ -78,16 +78,17 @@ inline bool cannot_touch(const SegmentGridScratch::Segment &a,
     if (!sweeps) {
       return true;
     }
-    const vec3 n0 = glm::cross(vec3(a.start_direction), vec3(b.start_direction));
+    const vec3 n0 = glm::cross(vec3(a.start_tip) - vec3(a.start_origin),
+                               vec3(b.start_tip) - vec3(b.start_origin));
     const vec3 w0 = vec3(b.start_origin) - vec3(a.start_origin);
     const float side0 = glm::dot(w0, n0);
     return (side0 > 0.0f) == (f1 > 0.0f) &&
            side0 * side0 > 1e-8f * glm::dot(w0, w0) * glm::dot(n0, n0);
   }
-  if (nn1 < 0.999f * parallel_limit && a.direction.w > 0.0f) {
+  if (nn1 < 0.999f * parallel_limit && a.tip.w > 0.0f) {
     /* Near parallel: b's projection onto the plane normal to a, seen from a's first node,
      * bounds the segments' distance from below. */
-    const float aa = a.direction.w;
+    const float aa = a.tip.w;
     const vec3 w1 = w + db;
     const vec3 q0 = w - (glm::dot(w, da) / aa) * da, q1 = w1 - (glm::dot(w1, da) / aa) * da;
     const vec3 dq = q1 - q0;
@@ -124,11 +125,15 @@ inline int cannot_touch4(const SegmentGridScratch::Segment &a,
   __m128 ox, oy, oz, radius, dx, dy, dz, dd;
   rows(0, ox, oy, oz, radius);
   rows(1, dx, dy, dz, dd);
-  const __m128 ax = set(a.direction.x), ay = set(a.direction.y), az = set(a.direction.z);
+  dx = _mm_sub_ps(dx, ox);
+  dy = _mm_sub_ps(dy, oy);
+  dz = _mm_sub_ps(dz, oz);
+  const vec3 da = vec3(a.tip) - vec3(a.origin);
+  const __m128 ax = set(da.x), ay = set(da.y), az = set(da.z);
   const __m128 nx = sub(mul(ay, dz), mul(az, dy)), ny = sub(mul(az, dx), mul(ax, dz)),
                nz = sub(mul(ax, dy), mul(ay, dx));
   const __m128 nn1 = dot(nx, ny, nz, nx, ny, nz);
-  const __m128 parallel_limit = mul(set(sin_parallel2), mul(set(a.direction.w), dd));
+  const __m128 parallel_limit = mul(set(sin_parallel2), mul(set(a.tip.w), dd));
   const __m128 radii_sum = mul(set(1.001f), add(set(a.origin.w), radius));
   const __m128 radii2 = mul(radii_sum, radii_sum);
   const __m128 wx = sub(ox, set(a.origin.x)), wy = sub(oy, set(a.origin.y)),
@@ -143,8 +148,11 @@ inline int cannot_touch4(const SegmentGridScratch::Segment &a,
     __m128 sx, sy, sz, unused, tx, ty, tz;
     rows(2, sx, sy, sz, unused);
     rows(3, tx, ty, tz, unused);
-    const __m128 bx = set(a.start_direction.x), by = set(a.start_direction.y),
-                 bz = set(a.start_direction.z);
+    tx = sub(tx, sx);
+    ty = sub(ty, sy);
+    tz = sub(tz, sz);
+    const vec3 start_da = vec3(a.start_tip) - vec3(a.start_origin);
+    const __m128 bx = set(start_da.x), by = set(start_da.y), bz = set(start_da.z);
     const __m128 mx = sub(mul(by, tz), mul(bz, ty)), my = sub(mul(bz, tx), mul(bx, tz)),
                  mz = sub(mul(bx, ty), mul(by, tx));
     const __m128 vx = sub(sx, set(a.start_origin.x)), vy = sub(sy, set(a.start_origin.y)),
@@ -157,9 +165,9 @@ inline int cannot_touch4(const SegmentGridScratch::Segment &a,
     reject = _mm_and_ps(reject, _mm_andnot_ps(same_sign, clear));
   }
   /* Near parallel. */
-  if (a.direction.w > 0.0f) {
+  if (a.tip.w > 0.0f) {
     const __m128 parallel = _mm_cmplt_ps(nn1, mul(set(0.999f), parallel_limit));
-    const __m128 aa = set(a.direction.w);
+    const __m128 aa = set(a.tip.w);
     const __m128 s0 = _mm_div_ps(dot(wx, wy, wz, ax, ay, az), aa);
     const __m128 w1x = add(wx, dx), w1y = add(wy, dy), w1z = add(wz, dz);
     const __m128 s1 = _mm_div_ps(dot(w1x, w1y, w1z, ax, ay, az), aa);
@@ -403,10 +411,10 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
       const vec3 da = positions[p + 1] - positions[p];
       segment.origin = vec4(positions[p], radii.is_empty() ? default_radius :
                                                              0.5f * (radii[p] + radii[p + 1]));
-      segment.direction = vec4(da, glm::dot(da, da));
+      segment.tip = vec4(positions[p + 1], glm::dot(da, da));
       const vec3 start0 = start[p], start1 = start[p + 1];
       segment.start_origin = vec4(start0, 0.0f);
-      segment.start_direction = vec4(start1 - start0, 0.0f);
+      segment.start_tip = vec4(start1, 0.0f);
       g.entry_curve[size_t(e)] = g.segment_curve[k];
       g.entry_point[size_t(e)] = int32_t(k) + g.segment_curve[k];
       g.entry_sweep[size_t(e)] = g.segment_sweep[k];
@@ -476,14 +484,18 @@ struct PairContext {
  * and its §5.3 response, when their swept spheres overlap at the end of the substep or passed
  * through each other during it. */
 bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const float sweeps,
-               SegmentContact &r_c)
+               SegmentContact &r_c, const SegmentGridScratch::Segment *copy_i = nullptr,
+               const SegmentGridScratch::Segment *copy_j = nullptr)
 {
   const Span<vec3> x = ctx.x;
-  const vec3 a0 = x[pi], a1 = x[pi + 1], b0 = x[pj], b1 = x[pj + 1];
-  const float ri = ctx.radii.is_empty() ? ctx.default_radius :
-                                          0.5f * (ctx.radii[pi] + ctx.radii[pi + 1]);
-  const float rj = ctx.radii.is_empty() ? ctx.default_radius :
-                                          0.5f * (ctx.radii[pj] + ctx.radii[pj + 1]);
+  const auto radius = [&](const int32_t p) {
+    return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
+  };
+  /* The nodes from the grid's copies when given (the same values, nearer in memory). */
+  const vec3 a0 = copy_i ? vec3(copy_i->origin) : x[pi], a1 = copy_i ? vec3(copy_i->tip) : x[pi + 1];
+  const vec3 b0 = copy_j ? vec3(copy_j->origin) : x[pj], b1 = copy_j ? vec3(copy_j->tip) : x[pj + 1];
+  const float ri = copy_i ? copy_i->origin.w : radius(pi);
+  const float rj = copy_j ? copy_j->origin.w : radius(pj);
   const float radii_sum = ri + rj;
   const vec3 da = a1 - a0, db = b1 - b0;
   const vec3 n1 = glm::cross(da, db);
@@ -501,8 +513,10 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
    * together), so pairs whose lines end farther apart than that plus the radii never touched. */
   const float reach = radii_sum + sweeps;
   if (ctx.start.sweeps() && !parallel && f1 * f1 <= reach * reach * nn1) {
-    const vec3 A0 = ctx.start[pi], A1 = ctx.start[pi + 1], B0 = ctx.start[pj],
-               B1 = ctx.start[pj + 1];
+    const vec3 A0 = copy_i ? vec3(copy_i->start_origin) : ctx.start[pi];
+    const vec3 A1 = copy_i ? vec3(copy_i->start_tip) : ctx.start[pi + 1];
+    const vec3 B0 = copy_j ? vec3(copy_j->start_origin) : ctx.start[pj];
+    const vec3 B1 = copy_j ? vec3(copy_j->start_tip) : ctx.start[pj + 1];
     side0 = side_volume(A0, A1, B0, B1);
     if (side0 != 0.0f && (side0 > 0.0f) != (f1 > 0.0f) &&
         !apart_throughout({A0, A1, B0, B1}, {a0, a1, b0, b1}, n1, 1.001f * radii_sum))
@@ -684,13 +698,18 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
    * strand at all, with different_strands_only). */
   const auto test = [&](const int32_t point_a, const int32_t curve_a, const float sweep_a,
                         const int32_t point_b, const int32_t curve_b, const float sweep_b,
-                        std::vector<SegmentContact> &out) {
+                        std::vector<SegmentContact> &out,
+                        const SegmentGridScratch::Segment *copy_a = nullptr,
+                        const SegmentGridScratch::Segment *copy_b = nullptr) {
     const int32_t pi = std::min(point_a, point_b), pj = std::max(point_a, point_b);
     if (curve_a == curve_b && (different_strands_only || pj - pi <= 1)) {
       return int64_t(0);
     }
+    if (point_a > point_b) {
+      std::swap(copy_a, copy_b);
+    }
     SegmentContact contact;
-    if (test_pair(ctx, pi, pj, sweep_a + sweep_b, contact)) {
+    if (test_pair(ctx, pi, pj, sweep_a + sweep_b, contact, copy_a, copy_b)) {
       out.push_back(contact);
     }
     return int64_t(1);
@@ -727,7 +746,7 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                             std::vector<SegmentContact> &out) {
     if (!rejected) {
       return test(entry_point[e], entry_curve[e], entry_sweep[e], entry_point[f],
-                  entry_curve[f], entry_sweep[f], out);
+                  entry_curve[f], entry_sweep[f], out, &segments[e], &segments[f]);
     }
     return entry_curve[e] != entry_curve[f] ||
                    (!different_strands_only && std::abs(entry_point[e] - entry_point[f]) > 1) ?

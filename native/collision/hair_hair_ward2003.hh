@@ -57,10 +57,10 @@ struct SegmentGridScratch {
   std::vector<float> lo_x, hi_x;  /* its box along the sweep axis */
   std::vector<vec4> cross_box;    /* and across it: (lo y, lo z, −hi y, −hi z) */
   struct Segment {
-    vec4 origin;          /* its first node at the end of the substep, and its LSS radius */
-    vec4 direction;       /* its second node minus its first, and its length² */
-    vec4 start_origin;    /* its first node at the substep's start */
-    vec4 start_direction; /* its second node minus its first there */
+    vec4 origin;       /* its first node at the end of the substep, and its LSS radius */
+    vec4 tip;          /* its second node there, and its length² */
+    vec4 start_origin; /* its first node at the substep's start */
+    vec4 start_tip;    /* its second node there */
   };
   std::vector<Segment> entry_segments; /* its copy */
   std::vector<int32_t> entry_point;                      /* its first point */
