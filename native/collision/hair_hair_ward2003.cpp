@@ -988,33 +988,44 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
   ctx.params = &params;
   ctx.sin_parallel = std::sin(params.near_parallel_angle);
   for (int iteration = 1; iteration < response_iterations; iteration++) {
-    size_t kept = 0;
-    for (size_t i = 0; i < contacts.size(); i++) {
-      SegmentContact c = contacts[i];
-      if (c.parallel) {
-        continue;
-      }
-      const bool was_crossed = c.crossed;
-      const vec3 side = c.move;
-      if (!test_pair(ctx, c.first, c.second, 0.0f, c)) {
-        continue;
-      }
-      if (was_crossed && glm::dot(c.core.point_b - c.core.point_a, side) < 0.0f) {
-        /* Still on the wrong side: push on along the side it came from. */
-        const float len = glm::length(side);
-        if (!(len > 0.0f)) {
+    /* Each pair re-tested (in parallel, into a copy), then those kept moved to the front in
+     * order. Like the serial loop before: the whole list again, the entries after the kept
+     * ones as the previous pass left them. */
+    g.keep.resize(contacts.size());
+    g.retested.resize(contacts.size());
+    parallel_for(int64_t(contacts.size()), 4096, [&](const IndexRange range) {
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        SegmentContact &c = g.retested[size_t(i)];
+        c = contacts[size_t(i)];
+        g.keep[size_t(i)] = 0;
+        if (c.parallel) {
           continue;
         }
-        const vec3 n = side / len;
-        const float radii_sum = c.core.distance - c.overlap;
-        const float depth = radii_sum - glm::dot(c.core.point_b - c.core.point_a, n);
-        c.move = (0.5f * params.push_strength * depth) * n;
-        c.crossed = true;
+        const bool was_crossed = c.crossed;
+        const vec3 side = c.move;
+        if (!test_pair(ctx, c.first, c.second, 0.0f, c)) {
+          continue;
+        }
+        if (was_crossed && glm::dot(c.core.point_b - c.core.point_a, side) < 0.0f) {
+          /* Still on the wrong side: push on along the side it came from. */
+          const float len = glm::length(side);
+          if (!(len > 0.0f)) {
+            continue;
+          }
+          const vec3 n = side / len;
+          const float radii_sum = c.core.distance - c.overlap;
+          const float depth = radii_sum - glm::dot(c.core.point_b - c.core.point_a, n);
+          c.move = (0.5f * params.push_strength * depth) * n;
+          c.crossed = true;
+        }
+        g.keep[size_t(i)] = c.parallel ? 0 : 1;
       }
-      if (c.parallel) {
-        continue;
+    });
+    size_t kept = 0;
+    for (size_t i = 0; i < contacts.size(); i++) {
+      if (g.keep[i]) {
+        contacts[kept++] = g.retested[i];
       }
-      contacts[kept++] = c;
     }
     if (kept == 0) {
       break;

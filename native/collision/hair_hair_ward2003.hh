@@ -73,6 +73,8 @@ struct SegmentGridScratch {
   std::vector<float> sort_scratch;
   std::vector<std::vector<SegmentContact>> chunk_contacts;
   std::vector<uint32_t> contact_offsets; /* per point: its first contact as `first` */
+  std::vector<uint8_t> keep;             /* per contact: still in contact when re-tested */
+  std::vector<SegmentContact> retested;  /* per contact: re-tested */
   /* The response's per-node sums of corrections and of their weights. */
   std::vector<vec4> dx, dv; /* xyz: the sum, w: the weight */
   vec3 cell_size{0.0f}; /* across the columns (along the sweep axis: 0) */
