@@ -201,11 +201,12 @@ ivec3 cell_of(const vec3 &p, const vec3 &lo, const glm::dvec3 &inv_cell, const i
 }
 
 /* Segments, their swept boxes, and the grid (§5.3: "insert each SSV of the hair into the
- * grids"; the cell edge is the mean segment length, or the largest box when that is more, up to
- * twice the mean). Each segment is inserted once, in the cell of its box's lower corner: a cell
- * at least as large as every box, two segments whose boxes overlap lie in the same or in
- * neighbouring cells. The few boxes larger than that are listed apart. Returns false when
- * there is no segment. */
+ * grids"). Here the cells are columns along the axis of the thinnest boxes (on average), each
+ * segment inserted once, in the column of its box's lower corner, and sorted along it. Across
+ * the columns, a cell is at least as wide as every box along each axis (up to twice the mean
+ * segment length), so two segments whose boxes overlap lie in the same or in neighbouring
+ * columns; the few boxes wider than that are listed apart. Returns false when there is no
+ * segment. */
 bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
                 const StartPositions &start, const Span<float> radii, const float default_radius,
                 SegmentGridScratch &g)

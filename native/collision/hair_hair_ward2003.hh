@@ -2,10 +2,12 @@
 /* Hair–hair collision of Ward & Lin 2003 §5.3 as a substep pass.
  *
  * Every strand segment is a line swept sphere (LSS) whose radius is the strand's thickness
- * (§5.2). The SSVs are inserted into a uniform grid whose cell edge is the mean segment length
- * (or the largest bounding box, up to twice that), each once, in the cell of its box's lower
- * corner; only segments in the same or neighbouring cells whose boxes overlap are tested: the
- * distance d between their cores minus their radii,
+ * (§5.2). The SSVs are inserted into a uniform grid (§5.3; here its cells are columns along
+ * the axis of the thinnest boxes, as wide as the largest box across them, up to twice the mean
+ * segment length), each once, in the column of its box's lower corner, sorted along the
+ * column; only segments in the same or neighbouring columns whose boxes overlap are tested
+ * (sweep and prune along the columns, each pair once): the distance d between their cores minus
+ * their radii,
  *
  *   overlap = d − (r1 + r2),                                   (§5.3)
  *
@@ -50,26 +52,27 @@ struct SegmentGridScratch {
   /* Per segment (segment k of strand c starts at point k + c). */
   std::vector<int32_t> segment_curve;
   std::vector<float> segment_sweep; /* m, the farthest one of its nodes moved in the substep */
-  std::vector<vec3> box_min, box_max; /* its swept LSS's bounding box, start and end */
-  std::vector<uint32_t> segment_cell; /* the cell of its box's lower corner (linear index) */
-  /* The grid: one entry per segment but the big ones, cell by cell (cells in linear order),
-   * within a cell in segment order; a cell's neighbours along x follow it. */
-  std::vector<float> lo_x, hi_x;  /* its box along the sweep axis */
-  std::vector<vec4> cross_box;    /* and across it: (lo y, lo z, −hi y, −hi z) */
+  std::vector<vec3> box_min, box_max; /* its swept LSS's bounding box, start and end (in `axes`) */
+  std::vector<uint32_t> segment_cell; /* the column of its box's lower corner (linear index) */
+  /* The grid: one entry per segment but the big ones, column by column (in linear order),
+   * within a column by the lower end of the box along it (ties by segment). Boxes and cells in
+   * the axes `axes` (x: the sweep axis along the columns, y and z across them). */
+  std::vector<float> lo_x, hi_x; /* its box along the sweep axis */
+  std::vector<vec4> cross_box;   /* and across it: (lo y, lo z, −hi y, −hi z) */
   struct Segment {
     vec4 origin;       /* its first node at the end of the substep, and its LSS radius */
     vec4 tip;          /* its second node there, and its length² */
     vec4 start_origin; /* its first node at the substep's start */
     vec4 start_tip;    /* its second node there */
   };
-  std::vector<Segment> entry_segments; /* its copy */
-  std::vector<int32_t> entry_point;                      /* its first point */
-  std::vector<int32_t> entry_curve;                      /* its strand */
-  std::vector<float> entry_sweep;                        /* its segment_sweep */
-  std::vector<uint32_t> cell_offsets;                    /* per cell: its first entry */
-  std::vector<uint32_t> fill;
-  std::vector<int32_t> entry_segment; /* per entry: its segment */
-  std::vector<int32_t> big_segments; /* segments whose box is larger than a cell */
+  std::vector<Segment> entry_segments; /* its copy (in the original axes) */
+  std::vector<int32_t> entry_point;    /* its first point */
+  std::vector<int32_t> entry_curve;    /* its strand */
+  std::vector<float> entry_sweep;      /* its segment_sweep */
+  std::vector<int32_t> entry_segment;  /* its segment */
+  std::vector<uint32_t> cell_offsets;  /* per column: its first entry */
+  std::vector<uint32_t> fill;          /* counting sort: per column, the next entry */
+  std::vector<int32_t> big_segments;   /* segments whose box is wider than a column */
   std::vector<float> sort_scratch;
   std::vector<std::vector<SegmentContact>> chunk_contacts;
   std::vector<uint32_t> contact_offsets; /* per point: its first contact as `first` */
@@ -82,13 +85,13 @@ struct SegmentGridScratch {
   ivec3 axes{0, 1, 2}; /* the boxes' (and the grid's) axes: the sweep axis first */
   vec3 grid_lo{0.0f};
   glm::dvec3 inv_cell{0.0};
-  int64_t candidate_pairs_num = 0; /* pairs whose boxes and bounding spheres overlap, tested */
+  int64_t candidate_pairs_num = 0; /* pairs whose boxes overlap, tested */
 };
 
 /* Every pair of segments whose LSSs intersect at `positions` (overlap < 0), but a strand's
  * neighbouring segments, in the order of their first, then second points (so independent of
- * the thread count and of the grid). Radii per
- * point (a segment takes the mean of its two nodes'), or empty for default_radius everywhere.
+ * the thread count and of the grid). Radii per point (a segment takes the mean of its two
+ * nodes'), or empty for default_radius everywhere.
  * With `different_strands_only`, pairs of one strand are left out too. With
  * `start_positions` (the nodes at the substep's start), also the pairs that passed through
  * each other on the way (continuous detection: each segment sweeps linearly from its start;
