@@ -630,39 +630,60 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
 }
 
 /* The chunks' contacts in the order of their pairs (first, then second point): a fixed order
- * that depends neither on the thread count nor on the grid's layout. A counting sort by the
- * first point, then each point's few contacts by the second. */
+ * that depends neither on the thread count nor on the grid's layout. In parallel: each
+ * contact's key (and where it is) goes to a bucket of first points (chunk by chunk), each
+ * bucket is sorted by key (the keys differ), then the contacts are copied in that order. */
 void gather_in_pair_order(const int64_t points_num, SegmentGridScratch &g,
                           std::vector<SegmentContact> &r_contacts)
 {
-  g.contact_offsets.assign(size_t(points_num) + 1, 0);
-  for (const std::vector<SegmentContact> &chunk : g.chunk_contacts) {
-    for (const SegmentContact &c : chunk) {
-      g.contact_offsets[size_t(c.first) + 1]++;
-    }
-  }
-  for (int64_t p = 0; p < points_num; p++) {
-    g.contact_offsets[size_t(p) + 1] += g.contact_offsets[size_t(p)];
-  }
-  r_contacts.resize(size_t(g.contact_offsets.back()));
-  for (const std::vector<SegmentContact> &chunk : g.chunk_contacts) {
-    for (const SegmentContact &c : chunk) {
-      r_contacts[g.contact_offsets[size_t(c.first)]++] = c;
-    }
-  }
-  uint32_t begin = 0;
-  for (int64_t p = 0; p < points_num; p++) {
-    const uint32_t end = g.contact_offsets[size_t(p)];
-    for (uint32_t i = begin + 1; i < end; i++) {
-      const SegmentContact c = r_contacts[i];
-      uint32_t j = i;
-      for (; j > begin && r_contacts[j - 1].second > c.second; j--) {
-        r_contacts[j] = r_contacts[j - 1];
+  constexpr int64_t buckets_num = 64;
+  const int64_t chunks_num = int64_t(g.chunk_contacts.size());
+  const auto bucket = [&](const int32_t point) {
+    return int64_t(point) * buckets_num / std::max<int64_t>(points_num, 1);
+  };
+  /* Per bucket and chunk (bucket-major): how many, then where they go. */
+  g.contact_offsets.assign(size_t(buckets_num * chunks_num) + 1, 0);
+  parallel_for(chunks_num, 8, [&](const IndexRange range) {
+    for (int64_t chunk = range.start; chunk < range.one_after_last(); chunk++) {
+      for (const SegmentContact &c : g.chunk_contacts[size_t(chunk)]) {
+        g.contact_offsets[size_t(bucket(c.first) * chunks_num + chunk)]++;
       }
-      r_contacts[j] = c;
     }
-    begin = end;
+  });
+  uint32_t total = 0;
+  for (size_t i = 0; i + 1 < g.contact_offsets.size(); i++) {
+    const uint32_t n = g.contact_offsets[i];
+    g.contact_offsets[i] = total;
+    total += n;
   }
+  g.contact_offsets.back() = total;
+  g.contact_keys.resize(total);
+  parallel_for(chunks_num, 8, [&](const IndexRange range) {
+    for (int64_t chunk = range.start; chunk < range.one_after_last(); chunk++) {
+      const std::vector<SegmentContact> &contacts = g.chunk_contacts[size_t(chunk)];
+      for (size_t i = 0; i < contacts.size(); i++) {
+        const SegmentContact &c = contacts[i];
+        uint32_t &next = g.contact_offsets[size_t(bucket(c.first) * chunks_num + chunk)];
+        g.contact_keys[next++] = {uint64_t(uint32_t(c.first)) << 32 | uint32_t(c.second),
+                                  uint32_t(chunk), uint32_t(i)};
+      }
+    }
+  });
+  r_contacts.resize(total);
+  parallel_for(buckets_num, 1, [&](const IndexRange range) {
+    for (int64_t b = range.start; b < range.one_after_last(); b++) {
+      /* The bucket's range: its chunks' counting offsets have moved to their ends. */
+      const uint32_t begin = b == 0 ? 0 : g.contact_offsets[size_t(b * chunks_num - 1)];
+      const uint32_t end = g.contact_offsets[size_t((b + 1) * chunks_num - 1)];
+      std::sort(g.contact_keys.begin() + begin, g.contact_keys.begin() + end,
+                [](const SegmentGridScratch::ContactKey &p,
+                   const SegmentGridScratch::ContactKey &q) { return p.pair < q.pair; });
+      for (uint32_t i = begin; i < end; i++) {
+        const SegmentGridScratch::ContactKey &key = g.contact_keys[i];
+        r_contacts[i] = g.chunk_contacts[key.chunk][key.index];
+      }
+    }
+  });
 }
 
 }  // namespace

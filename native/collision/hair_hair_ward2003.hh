@@ -75,7 +75,14 @@ struct SegmentGridScratch {
   std::vector<int32_t> big_segments;   /* segments whose box is wider than a column */
   std::vector<float> sort_scratch;
   std::vector<std::vector<SegmentContact>> chunk_contacts;
-  std::vector<uint32_t> contact_offsets; /* per point: its first contact as `first` */
+  /* Sorting the contacts: per bucket of first points and chunk, the first contact; per contact
+   * its pair (first << 32 | second) and where it is. */
+  std::vector<uint32_t> contact_offsets;
+  struct ContactKey {
+    uint64_t pair;
+    uint32_t chunk, index;
+  };
+  std::vector<ContactKey> contact_keys;
   std::vector<uint8_t> keep;             /* per contact: still in contact when re-tested */
   std::vector<SegmentContact> retested;  /* per contact: re-tested */
   /* The response's per-node sums of corrections and of their weights. */
