@@ -107,11 +107,13 @@ inline int cannot_touch4(const SegmentGridScratch::Segment &a,
                          const SegmentGridScratch::Segment *const b[4], const float sin_parallel2,
                          const bool sweeps)
 {
-  const auto rows = [&](const int field, __m128 &x, __m128 &y, __m128 &z, __m128 &w) {
-    x = _mm_loadu_ps(&(&b[0]->origin)[field].x);
-    y = _mm_loadu_ps(&(&b[1]->origin)[field].x);
-    z = _mm_loadu_ps(&(&b[2]->origin)[field].x);
-    w = _mm_loadu_ps(&(&b[3]->origin)[field].x);
+  /* The four segments' `field`, one lane each: x, y, z and w in four registers. */
+  const auto rows = [&](vec4 SegmentGridScratch::Segment::*const field, __m128 &x, __m128 &y,
+                        __m128 &z, __m128 &w) {
+    x = _mm_loadu_ps(&(b[0]->*field).x);
+    y = _mm_loadu_ps(&(b[1]->*field).x);
+    z = _mm_loadu_ps(&(b[2]->*field).x);
+    w = _mm_loadu_ps(&(b[3]->*field).x);
     _MM_TRANSPOSE4_PS(x, y, z, w);
   };
   const auto set = [](const float v) { return _mm_set1_ps(v); };
@@ -123,8 +125,8 @@ inline int cannot_touch4(const SegmentGridScratch::Segment &a,
     return add(add(mul(px, qx), mul(py, qy)), mul(pz, qz));
   };
   __m128 ox, oy, oz, radius, dx, dy, dz, dd;
-  rows(0, ox, oy, oz, radius);
-  rows(1, dx, dy, dz, dd);
+  rows(&SegmentGridScratch::Segment::origin, ox, oy, oz, radius);
+  rows(&SegmentGridScratch::Segment::tip, dx, dy, dz, dd);
   dx = _mm_sub_ps(dx, ox);
   dy = _mm_sub_ps(dy, oy);
   dz = _mm_sub_ps(dz, oz);
@@ -146,8 +148,8 @@ inline int cannot_touch4(const SegmentGridScratch::Segment &a,
   __m128 reject = _mm_and_ps(not_parallel, lines_apart);
   if (sweeps) {
     __m128 sx, sy, sz, unused, tx, ty, tz;
-    rows(2, sx, sy, sz, unused);
-    rows(3, tx, ty, tz, unused);
+    rows(&SegmentGridScratch::Segment::start_origin, sx, sy, sz, unused);
+    rows(&SegmentGridScratch::Segment::start_tip, tx, ty, tz, unused);
     tx = sub(tx, sx);
     ty = sub(ty, sy);
     tz = sub(tz, sz);
