@@ -301,7 +301,7 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   /* Across the columns, a cell is as large as the largest box along each axis (up to twice
    * the mean segment length; the boxes larger than that are listed apart, as big ones). */
   const vec3 largest_box = swizzle(bounds.largest_box);
-  vec3 cell;
+  vec3 cell(0.0f); /* along the columns: unused */
   for (int a = 1; a < 3; a++) {
     cell[a] = std::max({std::min(largest_box[a], 2.0f * mean_length) / cell_fill,
                         largest * 1e-6f, 1e-9f});
@@ -331,8 +331,7 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   }
   ivec3 dims;
   for (;;) {
-    dims = ivec3(glm::floor(extent / cell)) + ivec3(1);
-    dims.x = 1; /* columns */
+    dims = ivec3(1, int(std::floor(extent.y / cell.y)) + 1, int(std::floor(extent.z / cell.z)) + 1);
     if (double(dims.y) * dims.z <= double(max_cells_per_segment * segments_num + 4096)) {
       break;
     }
