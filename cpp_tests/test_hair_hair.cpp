@@ -98,6 +98,12 @@ TEST(HairHair, GridFindsExactlyTheBruteForcePairs)
       EXPECT_LT(c.overlap, 0.0f);
     }
     EXPECT_EQ(found.size(), contacts.size()) << "a pair was reported twice";
+    EXPECT_TRUE(std::is_sorted(contacts.begin(), contacts.end(),
+                               [](const SegmentContact &a, const SegmentContact &b) {
+                                 return a.first != b.first ? a.first < b.first :
+                                                             a.second < b.second;
+                               }))
+        << "contacts come in the order of their pairs";
     const auto reference = brute_force(strands, radius, different_only);
     EXPECT_GT(reference.size(), 100u);
     EXPECT_EQ(found, reference);
@@ -107,6 +113,107 @@ TEST(HairHair, GridFindsExactlyTheBruteForcePairs)
                 int64_t(reference.size()));
     }
   }
+}
+
+TEST(HairHair, BigSegmentsFindTheBruteForcePairsToo)
+{
+  /* Short random-walk strands and a few long ones whose segments (10 cm) outgrow the grid's
+   * cells, which are listed apart and tested against every cell they cover and each other;
+   * then so many long ones that the cells grow instead. */
+  for (const int long_num : {12, 1100}) {
+    Strands strands = random_strands(long_num == 12 ? 150 : 40, 10, 11);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (int s = 0; s < long_num; s++) {
+      const vec3 a = 0.04f * vec3(u(rng), u(rng), u(rng));
+      const vec3 dir = glm::normalize(vec3(u(rng), u(rng), u(rng)) + vec3(1e-3f));
+      strands.add({a, a + 0.1f * dir, a + 0.1f * dir + 0.005f * vec3(0, 0, 1)});
+    }
+    const float radius = 0.001f;
+    SegmentGridScratch scratch;
+    std::vector<SegmentContact> contacts;
+    find_segment_contacts(strands.offsets, strands.positions, {}, radius, false, scratch,
+                          contacts);
+    std::set<std::pair<int32_t, int32_t>> found;
+    for (const SegmentContact &c : contacts) {
+      found.insert({c.first, c.second});
+    }
+    EXPECT_EQ(found.size(), contacts.size()) << "a pair was reported twice";
+    const auto reference = brute_force(strands, radius, false);
+    EXPECT_GT(reference.size(), 50u);
+    EXPECT_EQ(found, reference) << long_num << " long strands";
+    EXPECT_GT(scratch.big_segments.size(), 0u);
+    EXPECT_LE(scratch.big_segments.size(), 1024u);
+  }
+}
+
+TEST(HairHair, MovingStrandsFindTheContactsOfTheirPairsAlone)
+{
+  /* With continuous detection (each segment swept from x − h v), the grid over all strands
+   * finds exactly the contacts it finds over each pair of strands alone (and each strand alone
+   * for its own), field for field. */
+  const Strands strands = random_strands(40, 7, 13);
+  SweptSphereParams params;
+  params.thickness = 0.0015f;
+  const float h = 0.02f;
+  const auto find = [&](const std::vector<int> &curves) {
+    Strands subset;
+    std::vector<int32_t> first_point;
+    for (const int c : curves) {
+      const auto begin = strands.positions.begin() + strands.offsets[size_t(c)];
+      const auto end = strands.positions.begin() + strands.offsets[size_t(c) + 1];
+      first_point.push_back(strands.offsets[size_t(c)] - int32_t(subset.positions.size()));
+      subset.add(std::vector<vec3>(begin, end), strands.velocities[size_t(strands.offsets[size_t(c)])]);
+    }
+    SegmentGridScratch scratch;
+    std::vector<SegmentContact> contacts;
+    find_segment_contacts(subset.offsets, subset.positions, {}, params.thickness, false, scratch,
+                          contacts, {}, subset.velocities, &params, h);
+    /* Back to the indices of all strands. */
+    const auto global = [&](const int32_t p) {
+      return p + first_point[size_t(std::upper_bound(subset.offsets.begin(), subset.offsets.end(), p) -
+                                    subset.offsets.begin() - 1)];
+    };
+    for (SegmentContact &c : contacts) {
+      c.first = global(c.first);
+      c.second = global(c.second);
+    }
+    return contacts;
+  };
+  std::vector<int> all(40);
+  for (int c = 0; c < 40; c++) {
+    all[size_t(c)] = c;
+  }
+  const std::vector<SegmentContact> together = find(all);
+  std::vector<SegmentContact> alone;
+  for (int a = 0; a < 40; a++) {
+    for (int b = a; b < 40; b++) {
+      for (const SegmentContact &c : find(a == b ? std::vector<int>{a} : std::vector<int>{a, b})) {
+        const bool own = a == b, pair_of_both = c.first < strands.offsets[size_t(a) + 1] &&
+                                               c.second >= strands.offsets[size_t(b)];
+        if (own || pair_of_both) {
+          alone.push_back(c);
+        }
+      }
+    }
+  }
+  std::sort(alone.begin(), alone.end(), [](const SegmentContact &p, const SegmentContact &q) {
+    return p.first != q.first ? p.first < q.first : p.second < q.second;
+  });
+  int64_t crossed = 0;
+  ASSERT_EQ(together.size(), alone.size());
+  for (size_t i = 0; i < together.size(); i++) {
+    const SegmentContact &p = together[i], &q = alone[i];
+    EXPECT_EQ(p.first, q.first);
+    EXPECT_EQ(p.second, q.second);
+    EXPECT_EQ(p.crossed, q.crossed);
+    EXPECT_EQ(p.parallel, q.parallel);
+    EXPECT_EQ(std::memcmp(&p.overlap, &q.overlap, sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(&p.move, &q.move, sizeof(vec3)), 0);
+    crossed += p.crossed ? 1 : 0;
+  }
+  EXPECT_GT(together.size(), 50u);
+  EXPECT_GT(crossed, 5);
 }
 
 TEST(HairHair, PerPointRadiiSetEachSegmentsSweptSphere)

@@ -1,9 +1,13 @@
 #include "collision/hair_hair_ward2003.hh"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#if defined(__SSE2__)
+#  include <emmintrin.h>
+#endif
 
 #include "core/parallel.hh"
 
@@ -11,14 +15,18 @@ namespace hairdyn {
 
 namespace {
 
-/* The most cells the grid may have: more than this (a groom spread far apart) and the cells
- * grow instead, so that the per-cell arrays stay small. */
-constexpr int64_t max_cells_per_segment = 4;
-/* Fixed chunks of segments for the counting sort (independent of the thread count). */
-constexpr int64_t sort_chunks_num = 8;
+/* The most cells the grid may have, per segment: more than this (a groom spread far apart)
+ * and the cells grow instead, so that the per-cell array stays small. */
+constexpr int64_t max_cells_per_segment = 1;
+/* The most segments whose box outgrows a cell (tested against the cells their box covers
+ * and against each other one by one): more, and the cells grow. */
+constexpr int64_t max_big_segments = 1024;
 /* Re-tests of the pairs found, each applying the response again to those still in contact:
  * one substep's Jacobi sweep under-resolves a node pushed by several pairs. */
 constexpr int response_iterations = 3;
+/* A segment's box is at most this share of a cell along every axis (else it is a big one):
+ * below 1, so that rounding in the cell coordinates never loses a pair. */
+constexpr float cell_fill = 0.999f;
 
 /* Where a segment's nodes were at the substep's start. */
 struct StartPositions {
@@ -35,9 +43,172 @@ struct StartPositions {
   bool sweeps() const { return !x0.is_empty() || !v.is_empty(); }
 };
 
-/* Segments, their swept boxes and cells, and the grid entries in cell order (§5.3: "insert
- * each SSV of the hair into the grids"; the cell edge is the mean segment length). Returns
- * false when there is no segment. */
+/* Whether two boxes overlap across the column axes: one's (lo y, lo z, −hi y, −hi z) against
+ * the other's (hi y, hi z, −lo y, −lo z). */
+inline bool boxes_meet(const vec4 &box, const vec4 &cross)
+{
+#if defined(__SSE2__)
+  return _mm_movemask_ps(_mm_cmple_ps(_mm_loadu_ps(&box.x), _mm_loadu_ps(&cross.x))) == 15;
+#else
+  return box.x <= cross.x && box.y <= cross.y && box.z <= cross.z && box.w <= cross.w;
+#endif
+}
+
+/* test_pair's rejections, from the grid's copies of the two segments (they lie near each
+ * other in memory, where the nodes of two strands do not), with a little slack for rounding:
+ * true when test_pair would find neither an overlap at the end of the substep nor a crossing
+ * during it. Pairs near the edge of a criterion are left to test_pair. */
+inline bool cannot_touch(const SegmentGridScratch::Segment &a,
+                         const SegmentGridScratch::Segment &b, const float sin_parallel2,
+                         const bool sweeps)
+{
+  const vec3 da = vec3(a.tip) - vec3(a.origin), db = vec3(b.tip) - vec3(b.origin);
+  const vec3 n1 = glm::cross(da, db);
+  const float nn1 = glm::dot(n1, n1);
+  const float parallel_limit = sin_parallel2 * (a.tip.w * b.tip.w);
+  const float radii_sum = 1.001f * (a.origin.w + b.origin.w);
+  const vec3 w = vec3(b.origin) - vec3(a.origin);
+  if (nn1 > 1.001f * parallel_limit) {
+    /* Not near parallel: the lines' distance bounds the segments' from below; they crossed
+     * only if b's side of a's line flipped. */
+    const float f1 = glm::dot(w, n1);
+    if (f1 * f1 <= radii_sum * radii_sum * nn1) {
+      return false;
+    }
+    if (!sweeps) {
+      return true;
+    }
+    const vec3 n0 = glm::cross(vec3(a.start_tip) - vec3(a.start_origin),
+                               vec3(b.start_tip) - vec3(b.start_origin));
+    const vec3 w0 = vec3(b.start_origin) - vec3(a.start_origin);
+    const float side0 = glm::dot(w0, n0);
+    return (side0 > 0.0f) == (f1 > 0.0f) &&
+           side0 * side0 > 1e-8f * glm::dot(w0, w0) * glm::dot(n0, n0);
+  }
+  if (nn1 < 0.999f * parallel_limit && a.tip.w > 0.0f) {
+    /* Near parallel: b's projection onto the plane normal to a, seen from a's first node,
+     * bounds the segments' distance from below. */
+    const float aa = a.tip.w;
+    const vec3 w1 = w + db;
+    const vec3 q0 = w - (glm::dot(w, da) / aa) * da, q1 = w1 - (glm::dot(w1, da) / aa) * da;
+    const vec3 dq = q1 - q0;
+    const float qq = glm::dot(dq, dq);
+    const float u = qq > 0.0f ? glm::clamp(-glm::dot(q0, dq) / qq, 0.0f, 1.0f) : 0.0f;
+    const vec3 closest = q0 + u * dq;
+    return glm::dot(closest, closest) >= radii_sum * radii_sum;
+  }
+  return false;
+}
+
+#if defined(__SSE2__)
+/* cannot_touch of segment a against four segments at once (the same arithmetic, four lanes):
+ * bit i of the result set when the pair with b[i] is rejected. */
+inline int cannot_touch4(const SegmentGridScratch::Segment &a,
+                         const SegmentGridScratch::Segment *const b[4], const float sin_parallel2,
+                         const bool sweeps)
+{
+  /* The four segments' `field`, one lane each: x, y, z and w in four registers. */
+  const auto rows = [&](vec4 SegmentGridScratch::Segment::*const field, __m128 &x, __m128 &y,
+                        __m128 &z, __m128 &w) {
+    x = _mm_loadu_ps(&(b[0]->*field).x);
+    y = _mm_loadu_ps(&(b[1]->*field).x);
+    z = _mm_loadu_ps(&(b[2]->*field).x);
+    w = _mm_loadu_ps(&(b[3]->*field).x);
+    _MM_TRANSPOSE4_PS(x, y, z, w);
+  };
+  const auto set = [](const float v) { return _mm_set1_ps(v); };
+  const auto add = [](const __m128 p, const __m128 q) { return _mm_add_ps(p, q); };
+  const auto sub = [](const __m128 p, const __m128 q) { return _mm_sub_ps(p, q); };
+  const auto mul = [](const __m128 p, const __m128 q) { return _mm_mul_ps(p, q); };
+  const auto dot = [&](const __m128 px, const __m128 py, const __m128 pz, const __m128 qx,
+                       const __m128 qy, const __m128 qz) {
+    return add(add(mul(px, qx), mul(py, qy)), mul(pz, qz));
+  };
+  __m128 ox, oy, oz, radius, dx, dy, dz, dd;
+  rows(&SegmentGridScratch::Segment::origin, ox, oy, oz, radius);
+  rows(&SegmentGridScratch::Segment::tip, dx, dy, dz, dd);
+  dx = _mm_sub_ps(dx, ox);
+  dy = _mm_sub_ps(dy, oy);
+  dz = _mm_sub_ps(dz, oz);
+  const vec3 da = vec3(a.tip) - vec3(a.origin);
+  const __m128 ax = set(da.x), ay = set(da.y), az = set(da.z);
+  const __m128 nx = sub(mul(ay, dz), mul(az, dy)), ny = sub(mul(az, dx), mul(ax, dz)),
+               nz = sub(mul(ax, dy), mul(ay, dx));
+  const __m128 nn1 = dot(nx, ny, nz, nx, ny, nz);
+  const __m128 parallel_limit = mul(set(sin_parallel2), mul(set(a.tip.w), dd));
+  const __m128 radii_sum = mul(set(1.001f), add(set(a.origin.w), radius));
+  const __m128 radii2 = mul(radii_sum, radii_sum);
+  const __m128 wx = sub(ox, set(a.origin.x)), wy = sub(oy, set(a.origin.y)),
+               wz = sub(oz, set(a.origin.z));
+  const __m128 zero = _mm_setzero_ps();
+  /* Not near parallel. */
+  const __m128 not_parallel = _mm_cmpgt_ps(nn1, mul(set(1.001f), parallel_limit));
+  const __m128 f1 = dot(wx, wy, wz, nx, ny, nz);
+  const __m128 lines_apart = _mm_cmpgt_ps(mul(f1, f1), mul(radii2, nn1));
+  __m128 reject = _mm_and_ps(not_parallel, lines_apart);
+  if (sweeps) {
+    __m128 sx, sy, sz, unused, tx, ty, tz;
+    rows(&SegmentGridScratch::Segment::start_origin, sx, sy, sz, unused);
+    rows(&SegmentGridScratch::Segment::start_tip, tx, ty, tz, unused);
+    tx = sub(tx, sx);
+    ty = sub(ty, sy);
+    tz = sub(tz, sz);
+    const vec3 start_da = vec3(a.start_tip) - vec3(a.start_origin);
+    const __m128 bx = set(start_da.x), by = set(start_da.y), bz = set(start_da.z);
+    const __m128 mx = sub(mul(by, tz), mul(bz, ty)), my = sub(mul(bz, tx), mul(bx, tz)),
+                 mz = sub(mul(bx, ty), mul(by, tx));
+    const __m128 vx = sub(sx, set(a.start_origin.x)), vy = sub(sy, set(a.start_origin.y)),
+                 vz = sub(sz, set(a.start_origin.z));
+    const __m128 side0 = dot(vx, vy, vz, mx, my, mz);
+    const __m128 same_sign = _mm_xor_ps(_mm_cmpgt_ps(side0, zero), _mm_cmpgt_ps(f1, zero));
+    const __m128 clear = _mm_cmpgt_ps(
+        mul(side0, side0),
+        mul(set(1e-8f), mul(dot(vx, vy, vz, vx, vy, vz), dot(mx, my, mz, mx, my, mz))));
+    reject = _mm_and_ps(reject, _mm_andnot_ps(same_sign, clear));
+  }
+  /* Near parallel. */
+  if (a.tip.w > 0.0f) {
+    const __m128 parallel = _mm_cmplt_ps(nn1, mul(set(0.999f), parallel_limit));
+    const __m128 aa = set(a.tip.w);
+    const __m128 s0 = _mm_div_ps(dot(wx, wy, wz, ax, ay, az), aa);
+    const __m128 w1x = add(wx, dx), w1y = add(wy, dy), w1z = add(wz, dz);
+    const __m128 s1 = _mm_div_ps(dot(w1x, w1y, w1z, ax, ay, az), aa);
+    const __m128 q0x = sub(wx, mul(s0, ax)), q0y = sub(wy, mul(s0, ay)), q0z = sub(wz, mul(s0, az));
+    const __m128 q1x = sub(w1x, mul(s1, ax)), q1y = sub(w1y, mul(s1, ay)),
+                 q1z = sub(w1z, mul(s1, az));
+    const __m128 qx = sub(q1x, q0x), qy = sub(q1y, q0y), qz = sub(q1z, q0z);
+    const __m128 qq = dot(qx, qy, qz, qx, qy, qz);
+    const __m128 u = _mm_and_ps(
+        _mm_cmpgt_ps(qq, zero),
+        _mm_min_ps(_mm_max_ps(_mm_div_ps(_mm_sub_ps(zero, dot(q0x, q0y, q0z, qx, qy, qz)), qq),
+                              zero),
+                   set(1.0f)));
+    const __m128 cx = add(q0x, mul(u, qx)), cy = add(q0y, mul(u, qy)), cz = add(q0z, mul(u, qz));
+    const __m128 apart = _mm_cmpge_ps(dot(cx, cy, cz, cx, cy, cz), radii2);
+    reject = _mm_or_ps(reject, _mm_and_ps(parallel, apart));
+  }
+  return _mm_movemask_ps(reject);
+}
+#endif
+
+/* The grid cell holding p (clamped to the grid). */
+ivec3 cell_of(const vec3 &p, const vec3 &lo, const glm::dvec3 &inv_cell, const ivec3 &dims)
+{
+  ivec3 c;
+  for (int a = 0; a < 3; a++) {
+    c[a] = std::clamp(int(std::floor((double(p[a]) - double(lo[a])) * inv_cell[a])), 0,
+                      dims[a] - 1);
+  }
+  return c;
+}
+
+/* Segments, their swept boxes, and the grid (§5.3: "insert each SSV of the hair into the
+ * grids"). Here the cells are columns along the axis of the thinnest boxes (on average), each
+ * segment inserted once, in the column of its box's lower corner, and sorted along it. Across
+ * the columns, a cell is at least as wide as every box along each axis (up to twice the mean
+ * segment length), so two segments whose boxes overlap lie in the same or in neighbouring
+ * columns; the few boxes wider than that are listed apart. Returns false when there is no
+ * segment. */
 bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
                 const StartPositions &start, const Span<float> radii, const float default_radius,
                 SegmentGridScratch &g)
@@ -53,14 +224,14 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   g.segment_sweep.resize(size_t(segments_num));
   g.box_min.resize(size_t(segments_num));
   g.box_max.resize(size_t(segments_num));
-  g.cell_min.resize(size_t(segments_num));
-  g.cell_max.resize(size_t(segments_num));
-  g.entry_offsets.resize(size_t(segments_num) + 1);
+  g.segment_cell.resize(size_t(segments_num));
 
-  /* Boxes of the swept segments and the mean segment length. */
+
+  /* Boxes of the swept segments, the mean segment length and the largest box. */
   struct Bounds {
     vec3 lo{std::numeric_limits<float>::max()}, hi{-std::numeric_limits<float>::max()};
     double length = 0.0;
+    vec3 largest_box{0.0f}, box_sum{0.0f};
   };
   const Bounds bounds = parallel_reduce(
       curves_num, 256, Bounds(),
@@ -90,6 +261,9 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
             b.lo = glm::min(b.lo, g.box_min[k]);
             b.hi = glm::max(b.hi, g.box_max[k]);
             b.length += double(glm::length(e - a));
+            const vec3 size = g.box_max[k] - g.box_min[k];
+            b.largest_box = glm::max(b.largest_box, size);
+            b.box_sum += size;
           }
         }
         return b;
@@ -99,123 +273,153 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
         r.lo = glm::min(a.lo, b.lo);
         r.hi = glm::max(a.hi, b.hi);
         r.length = a.length + b.length;
+        r.largest_box = glm::max(a.largest_box, b.largest_box);
+        r.box_sum = a.box_sum + b.box_sum;
         return r;
       });
-  const vec3 extent = bounds.hi - bounds.lo;
+  /* Sweep and prune along the axis of the thinnest boxes (on average): the grid's cells are
+   * columns along it. The boxes are stored with that axis first. */
+  const int sweep_axis = bounds.box_sum.x <= bounds.box_sum.y ?
+                             (bounds.box_sum.x <= bounds.box_sum.z ? 0 : 2) :
+                             (bounds.box_sum.y <= bounds.box_sum.z ? 1 : 2);
+  const ivec3 axes = sweep_axis == 0 ? ivec3(0, 1, 2) :
+                     sweep_axis == 1 ? ivec3(1, 2, 0) :
+                                       ivec3(2, 0, 1);
+  const auto swizzle = [&](const vec3 &p) { return vec3(p[axes.x], p[axes.y], p[axes.z]); };
+  g.axes = axes;
+  parallel_for(segments_num, 4096, [&](const IndexRange range) {
+    for (int64_t k = range.start; k < range.one_after_last(); k++) {
+      g.box_min[size_t(k)] = swizzle(g.box_min[size_t(k)]);
+      g.box_max[size_t(k)] = swizzle(g.box_max[size_t(k)]);
+
+    }
+  });
+  const vec3 grid_lo = swizzle(bounds.lo);
+  const vec3 extent = swizzle(bounds.hi) - grid_lo;
   const float largest = std::max(extent.x, std::max(extent.y, extent.z));
-  /* §5.3: the cell edge is the mean segment length; never so small that the cells outnumber
-   * a few per segment (a groom spread far apart) or the indices overflow. */
-  float cell = float(bounds.length / double(segments_num));
-  cell = std::max({cell, largest * 1e-6f, 1e-9f});
+  const float mean_length = float(bounds.length / double(segments_num));
+  /* Across the columns, a cell is as large as the largest box along each axis (up to twice
+   * the mean segment length; the boxes larger than that are listed apart, as big ones). */
+  const vec3 largest_box = swizzle(bounds.largest_box);
+  vec3 cell(0.0f); /* along the columns: unused */
+  for (int a = 1; a < 3; a++) {
+    cell[a] = std::max({std::min(largest_box[a], 2.0f * mean_length) / cell_fill,
+                        largest * 1e-6f, 1e-9f});
+  }
+  const auto is_big = [&](const int64_t k) {
+    const vec3 size = g.box_max[size_t(k)] - g.box_min[size_t(k)];
+    return size.y > cell_fill * cell.y || size.z > cell_fill * cell.z;
+  };
+  if (largest_box.y > cell_fill * cell.y || largest_box.z > cell_fill * cell.z) {
+    /* Too many big boxes (a fast motion): the cells grow to all but the largest few. */
+    int64_t big = 0;
+    for (int64_t k = 0; k < segments_num; k++) {
+      big += is_big(k) ? 1 : 0;
+    }
+    if (big > max_big_segments) {
+      std::vector<float> &sizes = g.sort_scratch;
+      sizes.resize(size_t(segments_num));
+      for (int a = 1; a < 3; a++) {
+        for (int64_t k = 0; k < segments_num; k++) {
+          sizes[size_t(k)] = g.box_max[size_t(k)][a] - g.box_min[size_t(k)][a];
+        }
+        const auto rank = sizes.end() - max_big_segments / 2 - 1;
+        std::nth_element(sizes.begin(), rank, sizes.end());
+        cell[a] = std::max(cell[a], *rank / cell_fill);
+      }
+    }
+  }
   ivec3 dims;
   for (;;) {
-    dims = ivec3(glm::floor(extent / cell)) + ivec3(1);
-    if (double(dims.x) * dims.y * dims.z <= double(max_cells_per_segment * segments_num + 4096)) {
+    dims = ivec3(1, int(std::floor(extent.y / cell.y)) + 1, int(std::floor(extent.z / cell.z)) + 1);
+    if (double(dims.y) * dims.z <= double(max_cells_per_segment * segments_num + 4096)) {
       break;
     }
     cell *= 1.25f;
   }
+  cell.x = 0.0f;
   g.cell_size = cell;
-  const float inv_cell = 1.0f / cell;
+  g.dims = dims;
   const int64_t cells_num = int64_t(dims.x) * dims.y * dims.z;
+  const glm::dvec3 inv_cell(0.0, 1.0 / double(cell.y), 1.0 / double(cell.z));
 
+  /* The cell of each box's lower corner (in double: no rounding across a cell's edge), or
+   * `big_cell` for the big ones. */
+  const uint32_t big_cell = std::numeric_limits<uint32_t>::max();
   parallel_for(segments_num, 4096, [&](const IndexRange range) {
     for (int64_t k = range.start; k < range.one_after_last(); k++) {
-      const ivec3 c0 = glm::clamp(ivec3(glm::floor((g.box_min[size_t(k)] - bounds.lo) * inv_cell)),
-                                  ivec3(0), dims - 1);
-      const ivec3 c1 = glm::clamp(ivec3(glm::floor((g.box_max[size_t(k)] - bounds.lo) * inv_cell)),
-                                  ivec3(0), dims - 1);
-      g.cell_min[size_t(k)] = c0;
-      g.cell_max[size_t(k)] = c1;
-      const ivec3 n = c1 - c0 + ivec3(1);
-      g.entry_offsets[size_t(k) + 1] = n.x * n.y * n.z;
+      if (is_big(k)) {
+        g.segment_cell[size_t(k)] = big_cell;
+        continue;
+      }
+      const ivec3 c = cell_of(g.box_min[size_t(k)], grid_lo, inv_cell, dims);
+      g.segment_cell[size_t(k)] = uint32_t(c.x + dims.x * (c.y + dims.y * c.z));
     }
   });
-  g.entry_offsets[0] = 0;
+  g.grid_lo = grid_lo;
+  g.inv_cell = inv_cell;
+
+  /* Counting sort of the segments by cell, stable: a cell lists its segments in order. */
+  g.cell_offsets.assign(size_t(cells_num) + 1, 0);
+  g.big_segments.clear();
   for (int64_t k = 0; k < segments_num; k++) {
-    g.entry_offsets[size_t(k) + 1] += g.entry_offsets[size_t(k)];
-  }
-  const int64_t entries_num = g.entry_offsets.back();
-  g.entry_keys.resize(size_t(entries_num));
-  parallel_for(segments_num, 4096, [&](const IndexRange range) {
-    for (int64_t k = range.start; k < range.one_after_last(); k++) {
-      const ivec3 c0 = g.cell_min[size_t(k)], c1 = g.cell_max[size_t(k)];
-      int64_t e = g.entry_offsets[size_t(k)];
-      for (int32_t z = c0.z; z <= c1.z; z++) {
-        for (int32_t y = c0.y; y <= c1.y; y++) {
-          for (int32_t x = c0.x; x <= c1.x; x++) {
-            g.entry_keys[size_t(e++)] = uint32_t(x + dims.x * (y + dims.y * z));
-          }
-        }
-      }
+    const uint32_t c = g.segment_cell[size_t(k)];
+    if (c == big_cell) {
+      g.big_segments.push_back(int32_t(k));
     }
-  });
-
-  /* Counting sort of the entries by cell, stable (a cell lists its segments in increasing
-   * order before the sort by x below), over fixed chunks of segments. */
-  const int64_t chunk = (segments_num + sort_chunks_num - 1) / sort_chunks_num;
-  g.chunk_counts.assign(size_t(sort_chunks_num * cells_num), 0);
-  run_chunks(sort_chunks_num, [&](const int64_t ch) {
-    uint32_t *counts = &g.chunk_counts[size_t(ch * cells_num)];
-    const int64_t k_end = std::min(segments_num, (ch + 1) * chunk);
-    if (ch * chunk >= k_end) {
-      return;
-    }
-    for (int64_t e = g.entry_offsets[size_t(ch * chunk)]; e < g.entry_offsets[size_t(k_end)]; e++) {
-      counts[g.entry_keys[size_t(e)]]++;
-    }
-  });
-  g.cell_offsets.resize(size_t(cells_num) + 1);
-  uint32_t total = 0;
-  for (int64_t cell_index = 0; cell_index < cells_num; cell_index++) {
-    g.cell_offsets[size_t(cell_index)] = total;
-    for (int64_t ch = 0; ch < sort_chunks_num; ch++) {
-      uint32_t &count = g.chunk_counts[size_t(ch * cells_num + cell_index)];
-      const uint32_t n = count;
-      count = total; /* now: where chunk ch's first entry of this cell goes */
-      total += n;
+    else {
+      g.cell_offsets[size_t(c) + 1]++;
     }
   }
-  g.cell_offsets[size_t(cells_num)] = total;
-  g.entries.resize(size_t(entries_num));
-  run_chunks(sort_chunks_num, [&](const int64_t ch) {
-    uint32_t *fill = &g.chunk_counts[size_t(ch * cells_num)];
-    const int64_t k_end = std::min(segments_num, (ch + 1) * chunk);
-    for (int64_t k = ch * chunk; k < k_end; k++) {
-      const int32_t curve = g.segment_curve[size_t(k)];
-      const vec3 lo = g.box_min[size_t(k)], hi = g.box_max[size_t(k)];
-      const ivec3 c0 = g.cell_min[size_t(k)];
-      int64_t e = g.entry_offsets[size_t(k)];
-      for (int32_t z = c0.z; z <= g.cell_max[size_t(k)].z; z++) {
-        for (int32_t y = c0.y; y <= g.cell_max[size_t(k)].y; y++) {
-          for (int32_t x = c0.x; x <= g.cell_max[size_t(k)].x; x++) {
-            const uint32_t key = g.entry_keys[size_t(e++)];
-            SegmentGridScratch::Entry &entry = g.entries[fill[key]++];
-            entry.min_x = lo.x;
-            entry.max_x = hi.x;
-            entry.min_y = lo.y;
-            entry.max_y = hi.y;
-            entry.min_z = lo.z;
-            entry.max_z = hi.z;
-            entry.point = int32_t(k) + curve;
-            entry.curve_flags = uint32_t(curve) << 3 | uint32_t(x == c0.x) |
-                                uint32_t(y == c0.y) << 1 | uint32_t(z == c0.z) << 2;
-          }
-        }
-      }
+  for (int64_t c = 0; c < cells_num; c++) {
+    g.cell_offsets[size_t(c) + 1] += g.cell_offsets[size_t(c)];
+  }
+  const size_t entries_num = g.cell_offsets.back();
+  g.entry_segment.resize(entries_num);
+  g.fill.assign(g.cell_offsets.begin(), g.cell_offsets.end() - 1);
+  for (int64_t k = 0; k < segments_num; k++) {
+    const uint32_t c = g.segment_cell[size_t(k)];
+    if (c != big_cell) {
+      g.entry_segment[g.fill[c]++] = int32_t(k);
+    }
+  }
+  /* Within a column, by the lower end along the sweep axis (ties by segment). */
+  parallel_for(cells_num, 64, [&](const IndexRange range) {
+    for (int64_t c = range.start; c < range.one_after_last(); c++) {
+      const uint32_t begin = g.cell_offsets[size_t(c)], end = g.cell_offsets[size_t(c) + 1];
+      std::sort(g.entry_segment.begin() + begin, g.entry_segment.begin() + end,
+                [&](const int32_t a, const int32_t b) {
+                  const float la = g.box_min[size_t(a)].x, lb = g.box_min[size_t(b)].x;
+                  return la < lb || (la == lb && a < b);
+                });
     }
   });
-  /* Within a cell, by the lower x of the boxes (sweep and prune along x; ties by point). */
-  parallel_for(cells_num, 1024, [&](const IndexRange range) {
-    for (int64_t cell_index = range.start; cell_index < range.one_after_last(); cell_index++) {
-      const uint32_t begin = g.cell_offsets[size_t(cell_index)];
-      const uint32_t end = g.cell_offsets[size_t(cell_index) + 1];
-      if (end - begin > 1) {
-        std::sort(g.entries.begin() + begin, g.entries.begin() + end,
-                  [](const SegmentGridScratch::Entry &a, const SegmentGridScratch::Entry &b) {
-                    return a.min_x < b.min_x || (a.min_x == b.min_x && a.point < b.point);
-                  });
-      }
+  g.lo_x.resize(entries_num);
+  g.hi_x.resize(entries_num);
+  g.cross_box.resize(entries_num);
+  g.entry_segments.resize(entries_num);
+  g.entry_point.resize(entries_num);
+  g.entry_curve.resize(entries_num);
+  g.entry_sweep.resize(entries_num);
+  parallel_for(int64_t(entries_num), 4096, [&](const IndexRange range) {
+    for (int64_t e = range.start; e < range.one_after_last(); e++) {
+      const size_t k = size_t(g.entry_segment[size_t(e)]);
+      const vec3 lo = g.box_min[k], hi = g.box_max[k];
+      g.lo_x[size_t(e)] = lo.x;
+      g.hi_x[size_t(e)] = hi.x;
+      g.cross_box[size_t(e)] = vec4(lo.y, lo.z, -hi.y, -hi.z);
+      const int32_t p = int32_t(k) + g.segment_curve[k];
+      SegmentGridScratch::Segment &segment = g.entry_segments[size_t(e)];
+      const vec3 da = positions[p + 1] - positions[p];
+      segment.origin = vec4(positions[p], radii.is_empty() ? default_radius :
+                                                             0.5f * (radii[p] + radii[p + 1]));
+      segment.tip = vec4(positions[p + 1], glm::dot(da, da));
+      const vec3 start0 = start[p], start1 = start[p + 1];
+      segment.start_origin = vec4(start0, 0.0f);
+      segment.start_tip = vec4(start1, 0.0f);
+      g.entry_curve[size_t(e)] = g.segment_curve[k];
+      g.entry_point[size_t(e)] = int32_t(k) + g.segment_curve[k];
+      g.entry_sweep[size_t(e)] = g.segment_sweep[k];
     }
   });
   return true;
@@ -237,6 +441,37 @@ inline float side_volume(const vec3 &a0, const vec3 &a1, const vec3 &b0, const v
   return glm::dot(b0 - a0, glm::cross(a1 - a0, b1 - b0));
 }
 
+/* Whether the segments a (nodes 0, 1) and b (nodes 2, 3), moving linearly from `start` to
+ * `end`, stay farther apart than `reach` all the way: along an axis normal to one of them in
+ * the plane of both lines (n: their common normal at the end), their projections are
+ * separated by more than `reach` at the start and at the end, on the same side. The gap along
+ * a fixed axis is concave in time (the least of linear functions minus the largest), so it is
+ * as large in between. A quick test before the root search of a side flip: most flips are of
+ * lines that passed each other far beyond the segments. */
+bool apart_throughout(const std::array<vec3, 4> &start, const std::array<vec3, 4> &end,
+                      const vec3 &n, const float reach)
+{
+  for (const int owner : {0, 2}) {
+    const vec3 u = glm::cross(n, end[size_t(owner) + 1] - end[size_t(owner)]);
+    const float uu = glm::dot(u, u);
+    if (!(uu > 0.0f)) {
+      continue;
+    }
+    const float least = reach * std::sqrt(uu);
+    float up = std::numeric_limits<float>::max(), down = up;
+    for (const std::array<vec3, 4> *nodes : {&start, &end}) {
+      const float pa0 = glm::dot((*nodes)[0], u), pa1 = glm::dot((*nodes)[1], u);
+      const float pb0 = glm::dot((*nodes)[2], u), pb1 = glm::dot((*nodes)[3], u);
+      up = std::min(up, std::min(pb0, pb1) - std::max(pa0, pa1));
+      down = std::min(down, std::min(pa0, pa1) - std::max(pb0, pb1));
+    }
+    if (up > least || down > least) {
+      return true;
+    }
+  }
+  return false;
+}
+
 struct PairContext {
   Span<vec3> x;
   StartPositions start;
@@ -251,14 +486,18 @@ struct PairContext {
  * and its §5.3 response, when their swept spheres overlap at the end of the substep or passed
  * through each other during it. */
 bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const float sweeps,
-               SegmentContact &r_c)
+               SegmentContact &r_c, const SegmentGridScratch::Segment *copy_i = nullptr,
+               const SegmentGridScratch::Segment *copy_j = nullptr)
 {
   const Span<vec3> x = ctx.x;
-  const vec3 a0 = x[pi], a1 = x[pi + 1], b0 = x[pj], b1 = x[pj + 1];
-  const float ri = ctx.radii.is_empty() ? ctx.default_radius :
-                                          0.5f * (ctx.radii[pi] + ctx.radii[pi + 1]);
-  const float rj = ctx.radii.is_empty() ? ctx.default_radius :
-                                          0.5f * (ctx.radii[pj] + ctx.radii[pj + 1]);
+  const auto radius = [&](const int32_t p) {
+    return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
+  };
+  /* The nodes from the grid's copies when given (the same values, nearer in memory). */
+  const vec3 a0 = copy_i ? vec3(copy_i->origin) : x[pi], a1 = copy_i ? vec3(copy_i->tip) : x[pi + 1];
+  const vec3 b0 = copy_j ? vec3(copy_j->origin) : x[pj], b1 = copy_j ? vec3(copy_j->tip) : x[pj + 1];
+  const float ri = copy_i ? copy_i->origin.w : radius(pi);
+  const float rj = copy_j ? copy_j->origin.w : radius(pj);
   const float radii_sum = ri + rj;
   const vec3 da = a1 - a0, db = b1 - b0;
   const vec3 n1 = glm::cross(da, db);
@@ -276,10 +515,14 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
    * together), so pairs whose lines end farther apart than that plus the radii never touched. */
   const float reach = radii_sum + sweeps;
   if (ctx.start.sweeps() && !parallel && f1 * f1 <= reach * reach * nn1) {
-    const vec3 A0 = ctx.start[pi], A1 = ctx.start[pi + 1], B0 = ctx.start[pj],
-               B1 = ctx.start[pj + 1];
+    const vec3 A0 = copy_i ? vec3(copy_i->start_origin) : ctx.start[pi];
+    const vec3 A1 = copy_i ? vec3(copy_i->start_tip) : ctx.start[pi + 1];
+    const vec3 B0 = copy_j ? vec3(copy_j->start_origin) : ctx.start[pj];
+    const vec3 B1 = copy_j ? vec3(copy_j->start_tip) : ctx.start[pj + 1];
     side0 = side_volume(A0, A1, B0, B1);
-    if (side0 != 0.0f && (side0 > 0.0f) != (f1 > 0.0f)) {
+    if (side0 != 0.0f && (side0 > 0.0f) != (f1 > 0.0f) &&
+        !apart_throughout({A0, A1, B0, B1}, {a0, a1, b0, b1}, n1, 1.001f * radii_sum))
+    {
       /* The root of the (cubic) side volume along the linear sweep: bisection, then a
        * secant step. */
       float lo = 0.0f, hi = 1.0f, f_lo = side0, f_hi = f1;
@@ -387,6 +630,63 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
   return true;
 }
 
+/* The chunks' contacts in the order of their pairs (first, then second point): a fixed order
+ * that depends neither on the thread count nor on the grid's layout. In parallel: each
+ * contact's key (and where it is) goes to a bucket of first points (chunk by chunk), each
+ * bucket is sorted by key (the keys differ), then the contacts are copied in that order. */
+void gather_in_pair_order(const int64_t points_num, SegmentGridScratch &g,
+                          std::vector<SegmentContact> &r_contacts)
+{
+  constexpr int64_t buckets_num = 64;
+  const int64_t chunks_num = int64_t(g.chunk_contacts.size());
+  const auto bucket = [&](const int32_t point) {
+    return int64_t(point) * buckets_num / std::max<int64_t>(points_num, 1);
+  };
+  /* Per bucket and chunk (bucket-major): how many, then where they go. */
+  g.contact_offsets.assign(size_t(buckets_num * chunks_num) + 1, 0);
+  parallel_for(chunks_num, 8, [&](const IndexRange range) {
+    for (int64_t chunk = range.start; chunk < range.one_after_last(); chunk++) {
+      for (const SegmentContact &c : g.chunk_contacts[size_t(chunk)]) {
+        g.contact_offsets[size_t(bucket(c.first) * chunks_num + chunk)]++;
+      }
+    }
+  });
+  uint32_t total = 0;
+  for (size_t i = 0; i + 1 < g.contact_offsets.size(); i++) {
+    const uint32_t n = g.contact_offsets[i];
+    g.contact_offsets[i] = total;
+    total += n;
+  }
+  g.contact_offsets.back() = total;
+  g.contact_keys.resize(total);
+  parallel_for(chunks_num, 8, [&](const IndexRange range) {
+    for (int64_t chunk = range.start; chunk < range.one_after_last(); chunk++) {
+      const std::vector<SegmentContact> &contacts = g.chunk_contacts[size_t(chunk)];
+      for (size_t i = 0; i < contacts.size(); i++) {
+        const SegmentContact &c = contacts[i];
+        uint32_t &next = g.contact_offsets[size_t(bucket(c.first) * chunks_num + chunk)];
+        g.contact_keys[next++] = {uint64_t(uint32_t(c.first)) << 32 | uint32_t(c.second),
+                                  uint32_t(chunk), uint32_t(i)};
+      }
+    }
+  });
+  r_contacts.resize(total);
+  parallel_for(buckets_num, 1, [&](const IndexRange range) {
+    for (int64_t b = range.start; b < range.one_after_last(); b++) {
+      /* The bucket's range: its chunks' counting offsets have moved to their ends. */
+      const uint32_t begin = b == 0 ? 0 : g.contact_offsets[size_t(b * chunks_num - 1)];
+      const uint32_t end = g.contact_offsets[size_t((b + 1) * chunks_num - 1)];
+      std::sort(g.contact_keys.begin() + begin, g.contact_keys.begin() + end,
+                [](const SegmentGridScratch::ContactKey &p,
+                   const SegmentGridScratch::ContactKey &q) { return p.pair < q.pair; });
+      for (uint32_t i = begin; i < end; i++) {
+        const SegmentGridScratch::ContactKey &key = g.contact_keys[i];
+        r_contacts[i] = g.chunk_contacts[key.chunk][key.index];
+      }
+    }
+  });
+}
+
 }  // namespace
 
 void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> positions,
@@ -412,51 +712,205 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
   if (!build_grid(curve_offsets, positions, ctx.start, radii, default_radius, g)) {
     return;
   }
-  const int64_t cells_num = int64_t(g.cell_offsets.size()) - 1;
-  /* Fixed chunks of cells (independent of the thread count), each with its own list. */
-  const int64_t grain = std::max<int64_t>(cells_num / 256, 16);
-  const int64_t chunks_num = (cells_num + grain - 1) / grain;
-  g.chunk_contacts.resize(size_t(chunks_num));
+  const ivec3 dims = g.dims;
+  const int64_t cells_num = int64_t(dims.x) * dims.y * dims.z;
+  const auto cell_index = [&](const int32_t x, const int32_t y, const int32_t z) {
+    return size_t(x) + size_t(dims.x) * (size_t(y) + size_t(dims.y) * size_t(z));
+  };
+  /* A pair whose boxes overlap: tested unless they are neighbours on one strand (or of one
+   * strand at all, with different_strands_only). */
+  const auto test = [&](const int32_t point_a, const int32_t curve_a, const float sweep_a,
+                        const int32_t point_b, const int32_t curve_b, const float sweep_b,
+                        std::vector<SegmentContact> &out,
+                        const SegmentGridScratch::Segment *copy_a = nullptr,
+                        const SegmentGridScratch::Segment *copy_b = nullptr) {
+    const int32_t pi = std::min(point_a, point_b), pj = std::max(point_a, point_b);
+    if (curve_a == curve_b && (different_strands_only || pj - pi <= 1)) {
+      return int64_t(0);
+    }
+    if (point_a > point_b) {
+      std::swap(copy_a, copy_b);
+    }
+    SegmentContact contact;
+    if (test_pair(ctx, pi, pj, sweep_a + sweep_b, contact, copy_a, copy_b)) {
+      out.push_back(contact);
+    }
+    return int64_t(1);
+  };
+  /* Tests segment a's box against the grid entries [begin, end). */
+  const auto test_entries = [&](const vec3 &lo, const vec3 &hi, const int32_t point, const int32_t curve, const float sweep,
+                                const uint32_t begin, const uint32_t end,
+                                std::vector<SegmentContact> &out) {
+    const vec4 cross(hi.y, hi.z, -lo.y, -lo.z);
+    int64_t tested = 0;
+    for (uint32_t f = begin; f < end; f++) {
+      if (g.lo_x[f] > hi.x || g.hi_x[f] < lo.x || !boxes_meet(g.cross_box[f], cross)) {
+        continue;
+      }
+      tested += test(point, curve, sweep, g.entry_point[f], g.entry_curve[f], g.entry_sweep[f],
+                     out);
+    }
+    return tested;
+  };
+  /* Fixed chunks of columns (independent of the thread count), each with its own list, then
+   * one chunk per big segment. */
+  const int64_t grain = std::max<int64_t>(cells_num / 256, 1);
+  const int64_t cell_chunks_num = (cells_num + grain - 1) / grain;
+  const int64_t big_num = int64_t(g.big_segments.size());
+  const float sin_parallel2 = ctx.sin_parallel * ctx.sin_parallel;
+  const bool sweeps = ctx.start.sweeps();
+  const float *lo_x = g.lo_x.data(), *hi_x = g.hi_x.data();
+  const vec4 *cross_box = g.cross_box.data();
+  const SegmentGridScratch::Segment *segments = g.entry_segments.data();
+  const int32_t *entry_point = g.entry_point.data(), *entry_curve = g.entry_curve.data();
+  const float *entry_sweep = g.entry_sweep.data();
+  /* The pair of entries e and f, whose boxes overlap (rejected: by cannot_touch). */
+  const auto test_hit = [&](const uint32_t e, const uint32_t f, const bool rejected,
+                            std::vector<SegmentContact> &out) {
+    if (!rejected) {
+      return test(entry_point[e], entry_curve[e], entry_sweep[e], entry_point[f],
+                  entry_curve[f], entry_sweep[f], out, &segments[e], &segments[f]);
+    }
+    return entry_curve[e] != entry_curve[f] ||
+                   (!different_strands_only && std::abs(entry_point[e] - entry_point[f]) > 1) ?
+               int64_t(1) :
+               int64_t(0);
+  };
+  g.chunk_contacts.resize(size_t(cell_chunks_num + big_num));
   const int64_t candidates = parallel_reduce(
-      chunks_num, 1, int64_t(0),
+      cell_chunks_num + big_num, 1, int64_t(0),
       [&](const IndexRange chunks) {
         int64_t tested = 0;
         for (int64_t chunk = chunks.start; chunk < chunks.one_after_last(); chunk++) {
           std::vector<SegmentContact> &out = g.chunk_contacts[size_t(chunk)];
           out.clear();
+          if (chunk >= cell_chunks_num) {
+            /* A big segment: against every entry of the cells its box covers, widened by one
+             * cell downwards (the entries there reach a cell up), and the big ones after it. */
+            const size_t k = size_t(g.big_segments[size_t(chunk - cell_chunks_num)]);
+            const vec3 lo = g.box_min[k], hi = g.box_max[k];
+            const int32_t curve = g.segment_curve[k], point = int32_t(k) + curve;
+            const float sweep = g.segment_sweep[k];
+            const ivec3 c0 = glm::max(cell_of(lo, g.grid_lo, g.inv_cell, dims) - 1, ivec3(0));
+            const ivec3 c1 = cell_of(hi, g.grid_lo, g.inv_cell, dims);
+            for (int32_t z = c0.z; z <= c1.z; z++) {
+              for (int32_t y = c0.y; y <= c1.y; y++) {
+                const size_t column = cell_index(0, y, z);
+                const uint32_t begin = g.cell_offsets[column];
+                const uint32_t end = uint32_t(
+                    std::upper_bound(g.lo_x.begin() + begin,
+                                     g.lo_x.begin() + g.cell_offsets[column + 1], hi.x) -
+                    g.lo_x.begin());
+                tested += test_entries(lo, hi, point, curve, sweep, begin, end, out);
+              }
+            }
+            for (int64_t i = chunk - cell_chunks_num + 1; i < big_num; i++) {
+              const size_t m = size_t(g.big_segments[size_t(i)]);
+              if (glm::any(glm::greaterThan(g.box_min[m], hi)) ||
+                  glm::any(glm::lessThan(g.box_max[m], lo)))
+              {
+                continue;
+              }
+              tested += test(point, curve, sweep, int32_t(m) + g.segment_curve[m],
+                             g.segment_curve[m], g.segment_sweep[m], out);
+            }
+            continue;
+          }
           const int64_t c_end = std::min(cells_num, (chunk + 1) * grain);
           for (int64_t c = chunk * grain; c < c_end; c++) {
             const uint32_t begin = g.cell_offsets[size_t(c)], end = g.cell_offsets[size_t(c) + 1];
-            for (uint32_t e = begin; e + 1 < end; e++) {
-              const SegmentGridScratch::Entry a = g.entries[e];
-              for (uint32_t f = e + 1; f < end; f++) {
-                const SegmentGridScratch::Entry &b = g.entries[f];
-                if (b.min_x > a.max_x) {
-                  break;
-                }
-                if (a.max_y < b.min_y || b.max_y < a.min_y || a.max_z < b.min_z ||
-                    b.max_z < a.min_z)
-                {
-                  continue;
-                }
-                /* Each pair once: in the first cell both touch (along every axis, this cell
-                 * is the first of one of them). */
-                if (((a.curve_flags | b.curve_flags) & 7u) != 7u) {
-                  continue;
-                }
-                const bool same_curve = (a.curve_flags >> 3) == (b.curve_flags >> 3);
-                const int32_t pi = std::min(a.point, b.point), pj = std::max(a.point, b.point);
-                if (same_curve && (different_strands_only || pj - pi <= 1)) {
-                  continue;
-                }
-                tested++;
-                SegmentContact contact;
-                const float sweeps = g.segment_sweep[size_t(a.point - int32_t(a.curve_flags >> 3))] +
-                                     g.segment_sweep[size_t(b.point - int32_t(b.curve_flags >> 3))];
-                if (test_pair(ctx, pi, pj, sweeps, contact)) {
-                  out.push_back(contact);
+            if (begin == end) {
+              continue;
+            }
+            /* Sweep and prune along the column, against this one and those around that the
+             * segment's box reaches (a box lower than this one's by up to a cell may meet it):
+             * a segment meets those that start after it (ties by point) before its end. */
+            const int32_t y = int32_t(c % dims.y), z = int32_t(c / dims.y);
+            uint32_t next[9], stop[9];
+            for (int n = 0; n < 9; n++) {
+              const int32_t yy = y + n % 3 - 1, zz = z + n / 3 - 1;
+              if (yy < 0 || yy >= dims.y || zz < 0 || zz >= dims.z) {
+                next[n] = stop[n] = 0;
+                continue;
+              }
+              next[n] = g.cell_offsets[cell_index(0, yy, zz)];
+              stop[n] = g.cell_offsets[cell_index(0, yy, zz) + 1];
+            }
+#if defined(__SSE2__)
+            uint32_t hits[4];
+            int hits_num = 0;
+            /* The box hits of entry e: four at a time through cannot_touch4, the rest
+             * (fewer than four) one by one. */
+            const auto test_hits = [&](const uint32_t e, const int n) {
+              int64_t tested_hits = 0;
+              int rejected = 0;
+              if (n == 4) {
+                const SegmentGridScratch::Segment *const b[4] = {
+                    &segments[hits[0]], &segments[hits[1]], &segments[hits[2]],
+                    &segments[hits[3]]};
+                rejected = cannot_touch4(segments[e], b, sin_parallel2, sweeps);
+              }
+              else {
+                for (int i = 0; i < n; i++) {
+                  rejected |= cannot_touch(segments[e], segments[hits[i]], sin_parallel2,
+                                           sweeps) ?
+                                  1 << i :
+                                  0;
                 }
               }
+              for (int i = 0; i < n; i++) {
+                tested_hits += test_hit(e, hits[i], (rejected >> i & 1) != 0, out);
+              }
+              return tested_hits;
+            };
+#endif
+            const float *const lo_x_local = lo_x;
+            const vec4 *const cross_box_local = cross_box;
+            for (uint32_t e = begin; e < end; e++) {
+              const float lo = lo_x[e], hi = hi_x[e];
+              const int32_t point = entry_point[e];
+              const vec4 box = cross_box[e];
+              const vec4 cross(-box.z, -box.w, -box.x, -box.y); /* (hi y, hi z, −lo y, −lo z) */
+              const ivec3 reach = cell_of(vec3(hi, cross.x, cross.y), g.grid_lo, g.inv_cell,
+                                          dims);
+              const int n_y = reach.y > y ? 3 : 2, n_z = reach.z > z ? 3 : 2;
+#if !defined(__SSE2__)
+              const SegmentGridScratch::Segment &segment = segments[e];
+#endif
+              for (int dz = 0; dz < n_z; dz++) {
+                for (int dy = 0; dy < n_y; dy++) {
+                  const int n = dz * 3 + dy;
+                  uint32_t f = next[n];
+                  const uint32_t f_stop = stop[n];
+                  while (f < f_stop &&
+                         (lo_x[f] < lo || (lo_x[f] == lo && entry_point[f] <= point))) {
+                    f++;
+                  }
+                  next[n] = f;
+                  const float *const column_lo = lo_x_local;
+                  const vec4 *const column_box = cross_box_local;
+                  for (; f < f_stop && column_lo[f] <= hi; f++) {
+#if defined(__SSE2__)
+                    /* Branch-free: the hit is kept when the boxes meet. */
+                    hits[hits_num] = f;
+                    hits_num += boxes_meet(column_box[f], cross) ? 1 : 0;
+                    if (hits_num == 4) {
+                      tested += test_hits(e, 4);
+                      hits_num = 0;
+                    }
+#else
+                    if (boxes_meet(column_box[f], cross)) {
+                      tested += test_hit(
+                          e, f, cannot_touch(segment, segments[f], sin_parallel2, sweeps), out);
+                    }
+#endif
+                  }
+                }
+              }
+#if defined(__SSE2__)
+              tested += test_hits(e, hits_num);
+              hits_num = 0;
+#endif
             }
           }
         }
@@ -464,9 +918,7 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
       },
       [](const int64_t a, const int64_t b) { return a + b; });
   g.candidate_pairs_num = candidates;
-  for (const std::vector<SegmentContact> &chunk : g.chunk_contacts) {
-    r_contacts.insert(r_contacts.end(), chunk.begin(), chunk.end());
-  }
+  gather_in_pair_order(positions.size(), g, r_contacts);
 }
 
 int64_t count_crossings(const Span<int32_t> curve_offsets, const Span<vec3> positions,
@@ -559,33 +1011,44 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
   ctx.params = &params;
   ctx.sin_parallel = std::sin(params.near_parallel_angle);
   for (int iteration = 1; iteration < response_iterations; iteration++) {
-    size_t kept = 0;
-    for (size_t i = 0; i < contacts.size(); i++) {
-      SegmentContact c = contacts[i];
-      if (c.parallel) {
-        continue;
-      }
-      const bool was_crossed = c.crossed;
-      const vec3 side = c.move;
-      if (!test_pair(ctx, c.first, c.second, 0.0f, c)) {
-        continue;
-      }
-      if (was_crossed && glm::dot(c.core.point_b - c.core.point_a, side) < 0.0f) {
-        /* Still on the wrong side: push on along the side it came from. */
-        const float len = glm::length(side);
-        if (!(len > 0.0f)) {
+    /* Each pair re-tested (in parallel, into a copy), then those kept moved to the front in
+     * order. Like the serial loop before: the whole list again, the entries after the kept
+     * ones as the previous pass left them. */
+    g.keep.resize(contacts.size());
+    g.retested.resize(contacts.size());
+    parallel_for(int64_t(contacts.size()), 4096, [&](const IndexRange range) {
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        SegmentContact &c = g.retested[size_t(i)];
+        c = contacts[size_t(i)];
+        g.keep[size_t(i)] = 0;
+        if (c.parallel) {
           continue;
         }
-        const vec3 n = side / len;
-        const float radii_sum = c.core.distance - c.overlap;
-        const float depth = radii_sum - glm::dot(c.core.point_b - c.core.point_a, n);
-        c.move = (0.5f * params.push_strength * depth) * n;
-        c.crossed = true;
+        const bool was_crossed = c.crossed;
+        const vec3 side = c.move;
+        if (!test_pair(ctx, c.first, c.second, 0.0f, c)) {
+          continue;
+        }
+        if (was_crossed && glm::dot(c.core.point_b - c.core.point_a, side) < 0.0f) {
+          /* Still on the wrong side: push on along the side it came from. */
+          const float len = glm::length(side);
+          if (!(len > 0.0f)) {
+            continue;
+          }
+          const vec3 n = side / len;
+          const float radii_sum = c.core.distance - c.overlap;
+          const float depth = radii_sum - glm::dot(c.core.point_b - c.core.point_a, n);
+          c.move = (0.5f * params.push_strength * depth) * n;
+          c.crossed = true;
+        }
+        g.keep[size_t(i)] = c.parallel ? 0 : 1;
       }
-      if (c.parallel) {
-        continue;
+    });
+    size_t kept = 0;
+    for (size_t i = 0; i < contacts.size(); i++) {
+      if (g.keep[i]) {
+        contacts[kept++] = g.retested[i];
       }
-      contacts[kept++] = c;
     }
     if (kept == 0) {
       break;

@@ -2,9 +2,12 @@
 /* Hair–hair collision of Ward & Lin 2003 §5.3 as a substep pass.
  *
  * Every strand segment is a line swept sphere (LSS) whose radius is the strand's thickness
- * (§5.2). The SSVs are inserted into a uniform grid whose cell edge is the mean segment length,
- * each into every cell its bounding box touches; only segments sharing a cell are tested: the
- * distance d between their cores minus their radii,
+ * (§5.2). The SSVs are inserted into a uniform grid (§5.3; here its cells are columns along
+ * the axis of the thinnest boxes, as wide as the largest box across them, up to twice the mean
+ * segment length), each once, in the column of its box's lower corner, sorted along the
+ * column; only segments in the same or neighbouring columns whose boxes overlap are tested
+ * (sweep and prune along the columns, each pair once): the distance d between their cores minus
+ * their radii,
  *
  *   overlap = d − (r1 + r2),                                   (§5.3)
  *
@@ -49,29 +52,53 @@ struct SegmentGridScratch {
   /* Per segment (segment k of strand c starts at point k + c). */
   std::vector<int32_t> segment_curve;
   std::vector<float> segment_sweep; /* m, the farthest one of its nodes moved in the substep */
-  std::vector<vec3> box_min, box_max; /* its swept LSS's bounding box, start and end */
-  std::vector<ivec3> cell_min, cell_max;
-  std::vector<int32_t> entry_offsets; /* its first grid entry */
-  /* The grid entries, cell by cell (cells in linear order), within a cell by box_min.x. */
-  struct Entry {
-    float min_x, max_x, min_y, max_y, min_z, max_z; /* the segment's box */
-    int32_t point;                                 /* its first point */
-    uint32_t curve_flags; /* strand << 3 | bit a set when this cell is its first along axis a */
+  std::vector<vec3> box_min, box_max; /* its swept LSS's bounding box, start and end (in `axes`) */
+  std::vector<uint32_t> segment_cell; /* the column of its box's lower corner (linear index) */
+  /* The grid: one entry per segment but the big ones, column by column (in linear order),
+   * within a column by the lower end of the box along it (ties by segment). Boxes and cells in
+   * the axes `axes` (x: the sweep axis along the columns, y and z across them). */
+  std::vector<float> lo_x, hi_x; /* its box along the sweep axis */
+  std::vector<vec4> cross_box;   /* and across it: (lo y, lo z, −hi y, −hi z) */
+  struct Segment {
+    vec4 origin;       /* its first node at the end of the substep, and its LSS radius */
+    vec4 tip;          /* its second node there, and its length² */
+    vec4 start_origin; /* its first node at the substep's start */
+    vec4 start_tip;    /* its second node there */
   };
-  std::vector<Entry> entries;
-  std::vector<uint32_t> entry_keys;   /* per entry in segment order: its cell's linear index */
-  std::vector<uint32_t> cell_offsets; /* per cell: its first entry */
-  std::vector<uint32_t> chunk_counts; /* counting sort: per chunk of segments and cell */
+  std::vector<Segment> entry_segments; /* its copy (in the original axes) */
+  std::vector<int32_t> entry_point;    /* its first point */
+  std::vector<int32_t> entry_curve;    /* its strand */
+  std::vector<float> entry_sweep;      /* its segment_sweep */
+  std::vector<int32_t> entry_segment;  /* its segment */
+  std::vector<uint32_t> cell_offsets;  /* per column: its first entry */
+  std::vector<uint32_t> fill;          /* counting sort: per column, the next entry */
+  std::vector<int32_t> big_segments;   /* segments whose box is wider than a column */
+  std::vector<float> sort_scratch;
   std::vector<std::vector<SegmentContact>> chunk_contacts;
+  /* Sorting the contacts: per bucket of first points and chunk, the first contact; per contact
+   * its pair (first << 32 | second) and where it is. */
+  std::vector<uint32_t> contact_offsets;
+  struct ContactKey {
+    uint64_t pair;
+    uint32_t chunk, index;
+  };
+  std::vector<ContactKey> contact_keys;
+  std::vector<uint8_t> keep;             /* per contact: still in contact when re-tested */
+  std::vector<SegmentContact> retested;  /* per contact: re-tested */
   /* The response's per-node sums of corrections and of their weights. */
   std::vector<vec4> dx, dv; /* xyz: the sum, w: the weight */
-  float cell_size = 0.0f;
-  int64_t candidate_pairs_num = 0; /* pairs sharing a cell whose boxes overlap */
+  vec3 cell_size{0.0f}; /* across the columns (along the sweep axis: 0) */
+  ivec3 dims{0};
+  ivec3 axes{0, 1, 2}; /* the boxes' (and the grid's) axes: the sweep axis first */
+  vec3 grid_lo{0.0f};
+  glm::dvec3 inv_cell{0.0};
+  int64_t candidate_pairs_num = 0; /* pairs whose boxes overlap, tested */
 };
 
 /* Every pair of segments whose LSSs intersect at `positions` (overlap < 0), but a strand's
- * neighbouring segments, in a fixed order that does not depend on the thread count. Radii per
- * point (a segment takes the mean of its two nodes'), or empty for default_radius everywhere.
+ * neighbouring segments, in the order of their first, then second points (so independent of
+ * the thread count and of the grid). Radii per point (a segment takes the mean of its two
+ * nodes'), or empty for default_radius everywhere.
  * With `different_strands_only`, pairs of one strand are left out too. With
  * `start_positions` (the nodes at the substep's start), also the pairs that passed through
  * each other on the way (continuous detection: each segment sweeps linearly from its start;
