@@ -1010,13 +1010,14 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
   ctx.v = v;
   ctx.params = &params;
   ctx.sin_parallel = std::sin(params.near_parallel_angle);
+  size_t active = contacts.size(); /* the pairs the last pass kept, at the front */
   for (int iteration = 1; iteration < response_iterations; iteration++) {
-    /* Each pair re-tested (in parallel, into a copy), then those kept moved to the front in
-     * order. Like the serial loop before: the whole list again, the entries after the kept
-     * ones as the previous pass left them. */
-    g.keep.resize(contacts.size());
-    g.retested.resize(contacts.size());
-    parallel_for(int64_t(contacts.size()), 4096, [&](const IndexRange range) {
+    /* Each pair the last pass kept is re-tested (in parallel, into a copy), then those kept
+     * again move to the front in order. (The whole list was re-tested before: the stale
+     * entries behind the kept ones were tested and applied a second time.) */
+    g.keep.resize(active);
+    g.retested.resize(active);
+    parallel_for(int64_t(active), 4096, [&](const IndexRange range) {
       for (int64_t i = range.start; i < range.one_after_last(); i++) {
         SegmentContact &c = g.retested[size_t(i)];
         c = contacts[size_t(i)];
@@ -1045,11 +1046,12 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
       }
     });
     size_t kept = 0;
-    for (size_t i = 0; i < contacts.size(); i++) {
+    for (size_t i = 0; i < active; i++) {
       if (g.keep[i]) {
         contacts[kept++] = g.retested[i];
       }
     }
+    active = kept;
     if (kept == 0) {
       break;
     }
