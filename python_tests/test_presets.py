@@ -1,4 +1,6 @@
 """Presets: the papers' settings ship with the add-on; artists save and load their own."""
+import hashlib
+import json
 from pathlib import Path
 
 import bpy
@@ -18,6 +20,7 @@ def test_paper_presets_apply(open_fixture):
                                   menu_idname="HAIRDYN_MT_presets")
     assert hair.hairdyn.method == 'STRANDS'
     assert hair.hairdyn.strands.integrator == 'EXPLICIT'
+    assert hair.hairdyn.strands.model == 'KURIHARA1993' and hair.hairdyn.strands.form_drag == 0.0
     assert hair.hairdyn.collision.map_kind == 'CYLINDER'
     assert (hair.hairdyn.collision.azimuth_num, hair.hairdyn.collision.height_num) == (40, 40)
     hair.hairdyn.lcp.neighbor_num = 5
@@ -48,3 +51,34 @@ def test_user_preset_round_trip(open_fixture):
         assert hair.hairdyn.collision.friction == pytest.approx(0.3)
     finally:
         path.unlink(missing_ok=True)
+
+
+def test_bundled_presets_stay_up_to_date_and_keep_the_users_changes(tmp_path, monkeypatch):
+    """A shipped preset updates an installed copy the add-on put there, and keeps a copy the
+    user changed (or one installed before hairdyn recorded what it installed) as
+    '<name> (yours).py'."""
+    monkeypatch.setattr(bpy.utils, "user_resource", lambda *_args, **_kwargs: str(tmp_path))
+    shipped = (presets.BUNDLED / "kurihara_1993.py").read_text()
+    installed = tmp_path / "kurihara_1993.py"
+    yours = tmp_path / "kurihara_1993 (yours).py"
+    presets.install_bundled()
+    assert installed.read_text() == shipped and not yours.exists()
+    # An older release's copy, recorded as installed by hairdyn: brought up to date.
+    installed.write_text("# an older hairdyn preset\n")
+    record = json.loads((tmp_path / presets.INSTALLED_RECORD).read_text())
+    record["kurihara_1993.py"] = hashlib.sha256(installed.read_bytes()).hexdigest()
+    (tmp_path / presets.INSTALLED_RECORD).write_text(json.dumps(record))
+    presets.install_bundled()
+    assert installed.read_text() == shipped and not yours.exists()
+    # The user's own edit: the shipped preset comes back, the edit is kept beside it.
+    installed.write_text(shipped + "settings.strands.substeps = 3\n")
+    presets.install_bundled()
+    assert installed.read_text() == shipped
+    assert yours.read_text().endswith("settings.strands.substeps = 3\n")
+    # A copy from before the record (no record at all): replaced, kept too.
+    yours.unlink()
+    (tmp_path / presets.INSTALLED_RECORD).unlink()
+    installed.write_text("# installed by a hairdyn without a record\n")
+    presets.install_bundled()
+    assert installed.read_text() == shipped
+    assert yours.read_text() == "# installed by a hairdyn without a record\n"
