@@ -75,8 +75,8 @@ static void BM_HairHairSubstep(benchmark::State &state)
   SegmentGridScratch scratch;
   std::vector<SegmentContact> contacts;
   HairHairStats stats;
-  {
-    /* The pass keeps its scratch from substep to substep: the timed calls reuse it. */
+  /* The settled groom's state, fresh for each call (the pass moves the nodes). */
+  const auto settled_state = [&]() {
     positions.assign(g.solver->positions().begin(), g.solver->positions().end());
     velocities.assign(g.solver->velocities().begin(), g.solver->velocities().end());
     SubstepState s;
@@ -84,17 +84,13 @@ static void BM_HairHairSubstep(benchmark::State &state)
     s.curve_offsets = g.offsets;
     s.positions_wo = positions;
     s.velocities_wo = velocities;
-    resolve_hair_hair(params, s, scratch, contacts);
-  }
+    return s;
+  };
+  /* The pass keeps its scratch from substep to substep: the timed calls reuse it. */
+  resolve_hair_hair(params, settled_state(), scratch, contacts);
   for (auto _ : state) {
     state.PauseTiming();
-    positions.assign(g.solver->positions().begin(), g.solver->positions().end());
-    velocities.assign(g.solver->velocities().begin(), g.solver->velocities().end());
-    SubstepState s;
-    s.h = 1.0f / 96.0f;
-    s.curve_offsets = g.offsets;
-    s.positions_wo = positions;
-    s.velocities_wo = velocities;
+    const SubstepState s = settled_state();
     state.ResumeTiming();
     stats = resolve_hair_hair(params, s, scratch, contacts);
     benchmark::DoNotOptimize(positions.data());

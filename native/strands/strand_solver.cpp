@@ -549,15 +549,21 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     std::vector<uint8_t> diverged(size_t(curves_num()), 0);
     for (const Substep &substep : substeps) {
       positions_start_ = positions_wo_;
-      /* A strand that diverged stays on its rest shape, carried by the head, whatever the
-       * passes do to its nodes, until the frame ends (the next frame starts it from there). */
-      for_each_curve([&](const int64_t curve, Counts &chunk) {
-        if (diverged[size_t(curve)]) {
-          place_at_rest(curve, substep.pose);
-        }
-        else if (!advance_strand(curve, substep, chunk)) {
-          diverged[size_t(curve)] = 1;
-        }
+      /* fn(curve, substep, counts) for each strand that has not diverged; one that has stays
+       * on its rest shape, carried by the head, whatever the passes do to its nodes, until the
+       * frame ends (the next frame starts it from there). */
+      const auto unless_diverged = [&](const auto &fn) {
+        for_each_curve([&](const int64_t curve, Counts &chunk) {
+          if (diverged[size_t(curve)]) {
+            place_at_rest(curve, substep.pose);
+          }
+          else if (!fn(curve, substep, chunk)) {
+            diverged[size_t(curve)] = 1;
+          }
+        });
+      };
+      unless_diverged([&](const int64_t curve, const Substep &s, Counts &chunk) {
+        return advance_strand(curve, s, chunk);
       });
       positions_before_ = positions_wo_;
       velocities_before_ = velocities_wo_;
@@ -591,13 +597,8 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
           }
         });
       }
-      for_each_curve([&](const int64_t curve, Counts &chunk) {
-        if (diverged[size_t(curve)]) {
-          place_at_rest(curve, substep.pose);
-        }
-        else if (!settle_strand(curve, substep, chunk)) {
-          diverged[size_t(curve)] = 1;
-        }
+      unless_diverged([&](const int64_t curve, const Substep &s, Counts &chunk) {
+        return settle_strand(curve, s, chunk);
       });
     }
   }
