@@ -81,10 +81,13 @@ struct Body {
   rvec3 bias_angular;        /* velocity-product accelerations across the hinge (c_i) */
   rvec3 bias_linear;
   rmat3 a, b, c;             /* articulated inertia at P_i, blocks [a b; bᵀ c] */
+  rmat3 ra, rb, rc;          /* the same less what the hinge absorbs: I^a = I^A − U D⁻¹ Uᵀ */
   rvec3 p_torque, p_force;   /* articulated bias force at P_i */
   rvec3 u_angular[2], u_linear[2]; /* U = I^A S, one column per hinge axis */
   rmat2 d_inverse;
   rvec2 u;                   /* τ − Sᵀ p^A */
+  bool touches;              /* the segment's tip is inside a collider: at `contact` */
+  Contact contact;
 };
 
 /* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
@@ -284,18 +287,25 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
                                  substep.head_velocity.of_point(center - head_center);
     const vec3 tip_velocity = node_velocity + glm::cross(omega, d * t) +
                               substep.head_velocity.of_point(tip - head_center);
-    const vec3 force = segment_force(substep, i, center, center_velocity, tip, tip_velocity,
+    if (predictor) { /* the shape, and so the tip's contact, is the same in both stages */
+      body.touches = colliders_ != nullptr && colliders_->find_contact(tip, body.contact);
+    }
+    const vec3 force = segment_force(substep, i, center, center_velocity,
+                                     body.touches ? &body.contact : nullptr, tip_velocity,
                                      wind_wo, pass_counts);
 
     /* The rod's inertia about P_i: m d² / 3 about every axis through P_i, its own axis
      * included (see axial_inertia_share), and the gyroscopic torque ω × (I ω) of that
-     * inertia. */
+     * inertia. The inertia depends on the shape alone, which the step's stage does not
+     * change: the predictor's articulated inertias serve the step. */
     const double transverse = double(m) * d * d / 3.0;
     const double spinless = 1.0 - double(axial_inertia_share);
     const rvec3 t_real = real(t), omega_real = real(omega), half_real = real(half);
-    body.a = transverse * (rmat3(1.0) - spinless * outer(t_real, t_real));
-    body.b = double(m) * cross_matrix(half_real);
-    body.c = rmat3(double(m));
+    if (predictor) {
+      body.a = transverse * (rmat3(1.0) - spinless * outer(t_real, t_real));
+      body.b = double(m) * cross_matrix(half_real);
+      body.c = rmat3(double(m));
+    }
     body.p_torque = -(spinless * transverse) * glm::dot(t_real, omega_real) *
                         glm::cross(omega_real, t_real) -
                     glm::cross(half_real, real(force));
@@ -316,56 +326,64 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
 
   /* Pass 2, tip to root (Table 7.1, second loop): U = I^A S, D = Sᵀ U + armature,
    * u = τ − Sᵀ p^A; the body's articulated inertia and bias less what its hinge absorbs,
-   * I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the parent's hinge point. */
+   * I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the parent's hinge point.
+   * U, D and I^a depend on the shape and the step alone: the predictor computes them, and
+   * the step only carries the bias forces. */
   for (size_t i = end; i-- > first;) {
     Body &body = bodies[i - first];
     const rvec3 axes[2] = {body.s_theta, body.s_phi};
-    for (int j = 0; j < 2; j++) {
-      body.u_angular[j] = body.a * axes[j];
-      body.u_linear[j] = glm::transpose(body.b) * axes[j];
-    }
     const double k = hinge_stiffness_[i];
     const double gamma = double(params_.bending_damping) * k; /* Kelvin–Voigt: γ = τ k */
     const rvec2 q(angles_[i]);
     const rvec2 rate(angular_velocities_[i]);
     const double hd = h;
     /* The hinge spring and damper, linearly implicit (see the top of the file). */
-    const double armature = implicit ? hd * gamma + hd * hd * k : 0.0;
     const rvec2 hinge_torque = -k * q - (implicit ? gamma + hd * k : gamma) * rate;
-    rmat2 d_matrix(glm::dot(axes[0], body.u_angular[0]), glm::dot(axes[1], body.u_angular[0]),
-                   glm::dot(axes[0], body.u_angular[1]), glm::dot(axes[1], body.u_angular[1]));
-    d_matrix[0][0] += armature;
-    d_matrix[1][1] += armature;
-    body.d_inverse = glm::inverse(d_matrix);
+    if (predictor) {
+      for (int j = 0; j < 2; j++) {
+        body.u_angular[j] = body.a * axes[j];
+        body.u_linear[j] = glm::transpose(body.b) * axes[j];
+      }
+      const double armature = implicit ? hd * gamma + hd * hd * k : 0.0;
+      rmat2 d_matrix(glm::dot(axes[0], body.u_angular[0]), glm::dot(axes[1], body.u_angular[0]),
+                     glm::dot(axes[0], body.u_angular[1]), glm::dot(axes[1], body.u_angular[1]));
+      d_matrix[0][0] += armature;
+      d_matrix[1][1] += armature;
+      body.d_inverse = glm::inverse(d_matrix);
+    }
     body.u = hinge_torque - rvec2(glm::dot(axes[0], body.p_torque),
                                   glm::dot(axes[1], body.p_torque));
     if (i == first) {
       break;
     }
-    /* I^a = I^A − U D⁻¹ Uᵀ, blockwise. */
     const rmat2 &di = body.d_inverse;
-    const rvec3 wa0 = di[0][0] * body.u_angular[0] + di[0][1] * body.u_angular[1];
-    const rvec3 wa1 = di[1][0] * body.u_angular[0] + di[1][1] * body.u_angular[1];
-    const rvec3 wl0 = di[0][0] * body.u_linear[0] + di[0][1] * body.u_linear[1];
-    const rvec3 wl1 = di[1][0] * body.u_linear[0] + di[1][1] * body.u_linear[1];
-    /* U D⁻¹ Uᵀ = Σ_jk U_j (D⁻¹)_jk U_kᵀ = Σ_k (U D⁻¹)_k U_kᵀ. */
-    const rmat3 a = body.a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
-    const rmat3 b = body.b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
-    const rmat3 c = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
+    Body &parent = bodies[i - 1 - first];
+    if (predictor) {
+      /* I^a = I^A − U D⁻¹ Uᵀ, blockwise. */
+      const rvec3 wa0 = di[0][0] * body.u_angular[0] + di[0][1] * body.u_angular[1];
+      const rvec3 wa1 = di[1][0] * body.u_angular[0] + di[1][1] * body.u_angular[1];
+      const rvec3 wl0 = di[0][0] * body.u_linear[0] + di[0][1] * body.u_linear[1];
+      const rvec3 wl1 = di[1][0] * body.u_linear[0] + di[1][1] * body.u_linear[1];
+      /* U D⁻¹ Uᵀ = Σ_jk U_j (D⁻¹)_jk U_kᵀ = Σ_k (U D⁻¹)_k U_kᵀ. */
+      body.ra = body.a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
+      body.rb = body.b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
+      body.rc = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
+      /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c,
+       * c. */
+      const rmat3 r = cross_matrix(body.arm);
+      const rmat3 rc = r * body.rc;
+      const rmat3 br = body.rb * r;
+      parent.a += body.ra - br + glm::transpose(-br) - rc * r;
+      parent.b += body.rb + rc;
+      parent.c += body.rc;
+    }
+    const rmat3 &a = body.ra, &b = body.rb, &c = body.rc;
     const rvec2 du = di * body.u;
     const rvec3 pa_torque = body.p_torque + a * body.bias_angular + b * body.bias_linear +
                             du.x * body.u_angular[0] + du.y * body.u_angular[1];
     const rvec3 pa_force = body.p_force + glm::transpose(b) * body.bias_angular +
                            c * body.bias_linear + du.x * body.u_linear[0] +
                            du.y * body.u_linear[1];
-    /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c, c. */
-    Body &parent = bodies[i - 1 - first];
-    const rmat3 r = cross_matrix(body.arm);
-    const rmat3 rc = r * c;
-    const rmat3 br = b * r;
-    parent.a += a - br + glm::transpose(-br) - rc * r;
-    parent.b += b + rc;
-    parent.c += c;
     parent.p_torque += pa_torque + glm::cross(body.arm, pa_force);
     parent.p_force += pa_force;
   }

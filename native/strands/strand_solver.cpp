@@ -296,16 +296,26 @@ vec3 StrandSolver::segment_force(const Substep &substep, const size_t i, const v
                                  const vec3 &tip_velocity, const vec3 &wind_wo,
                                  Counts &counts) const
 {
+  Contact contact;
+  const bool inside = colliders_ != nullptr && colliders_->find_contact(tip, contact);
+  return segment_force(substep, i, center, center_velocity, inside ? &contact : nullptr,
+                       tip_velocity, wind_wo, counts);
+}
+
+vec3 StrandSolver::segment_force(const Substep &substep, const size_t i, const vec3 &center,
+                                 const vec3 &center_velocity, const Contact *contact,
+                                 const vec3 &tip_velocity, const vec3 &wind_wo,
+                                 Counts &counts) const
+{
   const float d = rest_lengths_[i];
   /* The force on this segment, lumped on its tip node (Kurihara 1993, eq. 6). This is the one
    * place where a node's force is assembled: a collision response (eq. 12–15) filters it
    * here, from the node's position and velocity, before it becomes a torque. */
   vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo, substep.h);
-  Contact contact;
-  if (colliders_ != nullptr && colliders_->find_contact(tip, contact)) {
+  if (contact != nullptr) {
     /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
     const float mass = line_density() * d;
-    force = mass * reaction_constraint_force(force / mass, tip_velocity, contact,
+    force = mass * reaction_constraint_force(force / mass, tip_velocity, *contact,
                                              substep.reaction);
     counts.contacts++;
   }

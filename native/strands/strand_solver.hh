@@ -283,6 +283,11 @@ class StrandSolver {
   vec3 segment_force(const Substep &substep, size_t i, const vec3 &center,
                      const vec3 &center_velocity, const vec3 &tip, const vec3 &tip_velocity,
                      const vec3 &wind_wo, Counts &counts) const;
+  /* The same with the colliders' answer for the tip already known: `contact` is null where
+   * the tip is inside no collider (the articulated model's two stages share one query). */
+  vec3 segment_force(const Substep &substep, size_t i, const vec3 &center,
+                     const vec3 &center_velocity, const Contact *contact,
+                     const vec3 &tip_velocity, const vec3 &wind_wo, Counts &counts) const;
   /* Ward & Lin 2003 §5.5: when the segment from `node` (chart `chart`, angles `angles`) ends
    * at `tip` deeper than the tolerance inside a collider, it turns about `node` onto the
    * surface and stops turning. Returns true when it moved; r_normal, if given, receives the
