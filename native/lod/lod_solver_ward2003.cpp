@@ -56,6 +56,14 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
   const int64_t points = hierarchy_.rest_positions().size();
   positions_wo_.resize(size_t(points));
   residuals_wo_.assign(size_t(points), vec3(0.0f));
+  rest_lengths_.assign(size_t(points), 0.0f);
+  const Span<vec3> rest = hierarchy_.rest_positions();
+  for (int64_t strand = 0; strand < hierarchy_.strands_num(); strand++) {
+    const IndexRange strand_points = curve_points(hierarchy_.curve_offsets(), strand);
+    for (int64_t i = strand_points.start + 1; i < strand_points.one_after_last(); i++) {
+      rest_lengths_[size_t(i)] = glm::length(rest[i] - rest[i - 1]);
+    }
+  }
   point_levels_.assign(size_t(points), 0);
   reset(head_to_world_rest);
 }
@@ -409,6 +417,7 @@ void LodSolver::place_strands(const float frame_dt)
           out[i] += residual[i];
         }
       }
+      keep_segment_lengths(Span<float>(rest_lengths_).slice(points.start, points.size), out);
       for (int64_t i = 0; i < points.size; i++) {
         point_levels_[size_t(points.start + i)] = hierarchy_.depth(node);
       }

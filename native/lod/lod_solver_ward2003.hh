@@ -154,6 +154,7 @@ class LodSolver {
   /* Per point. */
   std::vector<vec3> positions_wo_;
   std::vector<vec3> residuals_wo_;
+  std::vector<float> rest_lengths_; /* m, from the previous point at rest (0 at roots) */
   std::vector<int32_t> point_levels_;
 
   int64_t splits_num_ = 0, merges_num_ = 0, collapses_num_ = 0;

@@ -28,7 +28,19 @@ void skin_strand(const LodHierarchy &hierarchy, const int64_t node, const int64_
     const int32_t f = i == points.start ? 0 : a + 1;
     const vec3 offset_rest = rest[i] - glm::mix(rest_skeleton[a], rest_skeleton[a + 1], w);
     const vec3 offset_local = glm::transpose(rest_frames[f]) * offset_rest;
-    r_positions_wo[i - points.start] = glm::mix(skeleton_wo[a], skeleton_wo[a + 1], w) + frames[f] * offset_local;
+    r_positions_wo[i - points.start] =
+        glm::mix(skeleton_wo[a], skeleton_wo[a + 1], w) + frames[f] * offset_local;
+  }
+}
+
+void keep_segment_lengths(const Span<float> rest_lengths, const MutableSpan<vec3> r_positions_wo)
+{
+  for (int64_t i = 1; i < r_positions_wo.size(); i++) {
+    const vec3 along = r_positions_wo[i] - r_positions_wo[i - 1];
+    const float length = glm::length(along);
+    if (length > 1e-6f * rest_lengths[i]) { /* a point on its parent keeps its place */
+      r_positions_wo[i] = r_positions_wo[i - 1] + (rest_lengths[i] / length) * along;
+    }
   }
 }
 

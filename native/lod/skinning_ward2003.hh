@@ -25,6 +25,15 @@ void current_skeleton_frames(Span<vec3> skeleton_wo, Span<mat3> rest_frames,
 void skin_strand(const LodHierarchy &hierarchy, int64_t node, int64_t strand,
                  Span<vec3> skeleton_wo, Span<mat3> frames, MutableSpan<vec3> r_positions_wo);
 
+/* Gives each segment of a placed strand its rest length, root to tip, keeping its direction
+ * (follow the leader: Müller, Kim & Chentanez 2012, "Fast simulation of inextensible hair and
+ * fur", §4, without the velocity correction, since a placed strand has no state of its own).
+ * A strand placed by rigid offsets from a skeleton (skin_strand) stretches on the outside of
+ * a bend of the skeleton and shrinks on the inside, by the offset times the turn between two
+ * segments' frames; on wide strips that is several times a segment. `rest_lengths` holds each
+ * point's distance to the previous point at rest (the root's is unused). */
+void keep_segment_lengths(Span<float> rest_lengths, MutableSpan<vec3> r_positions_wo);
+
 /* §6.2: a child's control points on its parent's current skeleton and frames, by the child's
  * stored offsets. */
 void place_child(Span<vec3> parent_skeleton_wo, Span<mat3> parent_frames, Span<vec3> offsets,
