@@ -155,3 +155,51 @@ def test_substep_passes_and_no_camera_are_refused_with_a_sentence(open_fixture):
         simulation.run(bpy.context, hair, 1, 1)
     cli.apply_settings(settings, ["lod_options.camera=Camera"])  # by name, as --set takes it
     assert simulation.run(bpy.context, hair, 1, 1)["lod_camera"] == "Camera"
+
+
+def test_colour_by_level_shades_the_output_and_gives_the_groom_back(open_fixture, artifacts):
+    hair = lod_hair(open_fixture)
+    settings = hair.hairdyn
+    settings.lod.velocity_slow, settings.lod.velocity_fast = 50.0, 100.0  # distance decides
+    camera = camera_facing_hair(hair, 0.3, "Close")
+    settings.lod_options.camera = camera
+    settings.lod_options.color_by_level = True  # no output yet: the run puts it on
+    report = simulation.run(bpy.context, hair, 1, 2)
+    output = settings.output_curves
+    slot = output.material_slots[0]
+    assert slot.link == 'OBJECT' and slot.material.name == "hairdyn_lod_level"
+    groom = [m.name for m in hair.data.materials if m is not None]
+    assert [m.name for m in output.data.materials if m is not None] == groom  # untouched
+    tree = slot.material.node_tree
+    reader = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeAttribute")
+    assert reader.attribute_name == "lod_level" and "lod_level" in output.data.attributes
+    finest = report["lod_finest_level"]
+    assert tree.nodes["finest_level"].inputs[1].default_value == max(1, finest)
+    assert len(np.unique(levels(hair))) >= 2  # a coarse and a fine colour to see
+
+    # What a render shows: the coarse strands red, the finest blue.
+    scene = bpy.context.scene
+    scene.camera = camera
+    for other in list(scene.objects):
+        if other not in (output, camera):
+            other.hide_render = True
+    scene.world = scene.world or bpy.data.worlds.new("World")
+    scene.render.engine = 'CYCLES'
+    scene.cycles.samples = 4
+    scene.cycles.use_denoising = False
+    scene.render.resolution_x, scene.render.resolution_y = 120, 120
+    path = artifacts / f"lod_levels_{bpy.app.version_string.split()[0]}.png"
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(str(path))
+    pixels = np.empty(len(image.pixels), dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    rgb = pixels.reshape(-1, 4)[:, :3]
+    red = (rgb[:, 0] > 2.0 * rgb[:, 2] + 0.02).sum()
+    blue = (rgb[:, 2] > 2.0 * rgb[:, 0] + 0.02).sum()
+    assert red > 20 and blue > 20, (red, blue)
+
+    settings.lod_options.color_by_level = False  # the groom's materials again, at once
+    assert output.material_slots[0].link == 'DATA'
+    settings.lod_options.color_by_level = True
+    assert output.material_slots[0].material.name == "hairdyn_lod_level"

@@ -24,6 +24,72 @@ from .base import Section, object_poll
 from .strands import Attached, Extension, NoPasses
 
 NAME = "Level of detail (Ward & Lin 2003)"
+LEVEL_MATERIAL = "hairdyn_lod_level"
+
+
+def ensure_level_material(finest_level=None):
+    """The material that colours hair by the `lod_level` point attribute: red on the coarsest
+    strips through green to blue on the finest level (`finest_level`, when given, sets the
+    scale; it is kept from the last run otherwise), lit diffusely with a little glow so that
+    the colours read in any light. Shown in Material Preview and Rendered shading."""
+    material = bpy.data.materials.get(LEVEL_MATERIAL)
+    if material is None:
+        material = bpy.data.materials.new(LEVEL_MATERIAL)
+        material.use_nodes = True
+        nodes, links = material.node_tree.nodes, material.node_tree.links
+        nodes.clear()
+        level = nodes.new("ShaderNodeAttribute")
+        level.attribute_name = "lod_level"
+        scale = nodes.new("ShaderNodeMath")
+        scale.name = "finest_level"
+        scale.operation = 'DIVIDE'
+        scale.inputs[1].default_value = 1.0
+        links.new(level.outputs["Fac"], scale.inputs[0])
+        ramp = nodes.new("ShaderNodeValToRGB")
+        stops = ramp.color_ramp.elements
+        stops[0].color = (1.0, 0.08, 0.03, 1.0)
+        stops[1].color = (0.05, 0.25, 1.0, 1.0)
+        stops.new(0.5).color = (0.2, 0.9, 0.1, 1.0)
+        links.new(scale.outputs[0], ramp.inputs["Fac"])
+        diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+        glow = nodes.new("ShaderNodeEmission")
+        glow.inputs["Strength"].default_value = 0.3
+        for shader in (diffuse, glow):
+            links.new(ramp.outputs["Color"], shader.inputs["Color"])
+        add = nodes.new("ShaderNodeAddShader")
+        links.new(diffuse.outputs[0], add.inputs[0])
+        links.new(glow.outputs[0], add.inputs[1])
+        output = nodes.new("ShaderNodeOutputMaterial")
+        links.new(add.outputs[0], output.inputs["Surface"])
+    if finest_level is not None:
+        material.node_tree.nodes["finest_level"].inputs[1].default_value = max(1, finest_level)
+    return material
+
+
+def show_levels(hair_obj):
+    """While lod_options.color_by_level is on, the output curves wear the level material in
+    their first slot as the object's own (the slot linked to the object), so the groom's
+    materials stay in the curves data untouched; off, the slot shows the data's again."""
+    settings = hair_obj.hairdyn
+    output = settings.output_curves
+    if output is None or output.type != 'CURVES':
+        return
+    slots = output.material_slots
+    if settings.lod_options.color_by_level:
+        material = ensure_level_material()
+        if not slots:
+            output.data.materials.append(None)
+        if slots[0].link != 'OBJECT' or slots[0].material != material:
+            slots[0].link = 'OBJECT'
+            slots[0].material = material
+    elif slots and slots[0].link == 'OBJECT' and slots[0].material is not None:
+        if slots[0].material.name == LEVEL_MATERIAL:
+            slots[0].material = None
+            slots[0].link = 'DATA'
+
+
+def _color_by_level_changed(options, _context):
+    show_levels(options.id_data)
 
 
 class HairdynLodOptions(bpy.types.PropertyGroup):
@@ -42,6 +108,15 @@ class HairdynLodOptions(bpy.types.PropertyGroup):
         description="Also simulate every strand without level of detail over the same frames "
         "and report lod_error, the mean distance between the two as a share of the hair "
         "length. Doubles the work",
+    )
+    color_by_level: BoolProperty(
+        name="Colour by Level",
+        default=False,
+        update=_color_by_level_changed,
+        description="Shade the output strands by the level of detail that drives each one "
+        "(the lod_level point attribute, §6.1): red the coarsest strips, green clusters, blue "
+        "the finest level. Seen in Material Preview and Rendered shading; the groom's own "
+        "materials come back when it is off",
     )
 
 
@@ -121,6 +196,9 @@ class LodStrands(Attached):
         self.rest_rotation = rotation(build.head_matrix)
         self.root_frames = self.rest_frames
         self.levels, self.switches, self.errors, self.ms, self.fine_ms = [], 0, [], [], []
+        self.hair_obj = build.hair_obj
+        if self.options.color_by_level:
+            ensure_level_material(self.solver.finest_level)
 
     def _camera(self):
         camera = self.options.camera or self.scene.camera
@@ -176,6 +254,9 @@ class LodStrands(Attached):
 
     # The extension's attached figures.
 
+    def after_step(self, _solver, _head_matrix):
+        show_levels(self.hair_obj)  # the output curves exist from the first frame written
+
     def strand_attributes(self):
         return {"lod_level": np.asarray(self.solver.lod_level, dtype=np.float32)}
 
@@ -228,6 +309,7 @@ def attach(solver, _build):
 def _draw(layout, settings):
     layout.prop(settings.lod_options, "camera")
     layout.prop(settings.lod_options, "measure_error")
+    layout.prop(settings.lod_options, "color_by_level")
     layout.label(
         text="Not with volume smoothing, targeting or swept spheres (no substep passes)",
         icon='INFO',
