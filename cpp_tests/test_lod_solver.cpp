@@ -586,3 +586,24 @@ TEST(LodSolver, StrandsOnCoarseSkeletonsKeepTheirLengths)
   std::printf("largest relative stretch of an output segment: %.3g\n", double(stretch));
   EXPECT_LT(stretch, 1e-4f);
 }
+
+TEST(LodSolver, CountsTheSkeletonsContacts)
+{
+  /* A wind from above presses the skeletons onto the head: their contacts (the reaction
+   * constraint's, every level's solver) are counted for the frame record; without colliders
+   * there are none. */
+  WindParams wind;
+  wind.speed = 6.0f;
+  wind.direction = vec3(0.0f, 0.0f, -1.0f);
+  Scene scene(scene_params(), wind);
+  int64_t contacts = 0;
+  for (int frame = 0; frame < 12; frame++) {
+    scene.step(close_eye);
+    contacts = std::max(contacts, scene.solver.contacts_num());
+  }
+  std::printf("most contacts in a frame: %lld\n", (long long)contacts);
+  EXPECT_GT(contacts, 0);
+  scene.solver.set_colliders(nullptr, CollisionParams());
+  scene.step(close_eye);
+  EXPECT_EQ(scene.solver.contacts_num(), 0);
+}

@@ -144,6 +144,9 @@ void bind_lod(py::module_ &m)
           "Active skeletons at each level (depth 0 .. max_depth) after the last step.")
       .def_property_readonly("active_num", &LodSolver::active_num,
                              "Active skeletons after the last step.")
+      .def_property_readonly("contacts_num", &LodSolver::contacts_num,
+                             "Skeleton nodes inside a collider during the last step, over its "
+                             "substeps (the reaction constraint's contacts).")
       .def_property_readonly("stepped_num", &LodSolver::stepped_num,
                              "Skeletons the last step simulated: the active ones, and on a "
                              "switch those that drove strands at the frame before.")

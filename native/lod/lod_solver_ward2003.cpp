@@ -475,6 +475,15 @@ int64_t LodSolver::stepped_num() const
   return count;
 }
 
+int64_t LodSolver::contacts_num() const
+{
+  int64_t count = 0;
+  for (const StrandSolver &solver : level_solvers_) {
+    count += solver.contacts_num();
+  }
+  return count;
+}
+
 std::vector<int64_t> LodSolver::stepped_per_level() const
 {
   std::vector<int64_t> counts;

@@ -105,6 +105,9 @@ class LodSolver {
    * switch made inactive), and per level. */
   int64_t stepped_num() const;
   std::vector<int64_t> stepped_per_level() const;
+  /* Skeleton nodes inside a collider during the last step (the reaction constraint, Kurihara
+   * 1993 eq. 12–15), over every substep: StrandSolver::contacts_num of each level. */
+  int64_t contacts_num() const;
 
   /* The transitions step() makes, for tests: split an active node into its children (§6.2);
    * merge the active children of `parent` into it (§6.3). The output is updated at the next

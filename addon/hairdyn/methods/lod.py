@@ -250,7 +250,10 @@ class LodStrands(Attached):
         non-finite output is refused by Simulation.frame)."""
         return 0 if self.fine is None else self.fine.diverged_num
 
-    contacts_num = 0  # the LodSolver does not count its contacts
+    @property
+    def contacts_num(self):
+        """The skeletons' contacts over the last step's substeps."""
+        return self.solver.contacts_num
 
     # The extension's attached figures.
 
