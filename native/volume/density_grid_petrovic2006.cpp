@@ -214,91 +214,52 @@ void splat_density(const GridFrame &grid, const PointBins &bins, const MutableSp
 
 namespace {
 
-/* One axis of blur_binomial over `planes` planes of `length` × `width` values, plane p starting
- * at p · plane_offset, value (t, i) of a plane at t · step + i from its start; t runs along the
- * axis. A plane is copied to the same place in `scratch` and filtered back from there, so the
- * planes are independent and each is read while it is in cache. */
-template<typename T>
-void blur_axis(const Span<float> weights, const int64_t planes, const int64_t plane_offset,
-               const int length, const int64_t step, const int64_t width,
-               const MutableSpan<T> values, const MutableSpan<T> scratch)
+/* One axis of blur_binomial from `in` into `out` over `planes` planes of `length` × `width`
+ * values, plane p starting at p · plane_offset, value (t, i) of a plane at t · step + i from its
+ * start; t runs along the axis. Each value sums its taps from 0 in the order of k, k outer and
+ * the row inner (along x, where a row is one value, the whole plane is the row). */
+template<typename T> void blur_axis(const Span<float> weights, const int64_t planes,
+                                    const int64_t plane_offset, const int length,
+                                    const int64_t step, const int64_t width, const Span<T> in,
+                                    const MutableSpan<T> out)
 {
   const int radius = int(weights.size() / 2);
   const int64_t grain = std::max<int64_t>(1, blur_grain / (int64_t(length) * width));
+  /* out[i] = Σ_k w_k in_k[i] for i < n, the terms added to out. */
+  const auto add_tap = [](T *r_out, const T *in_k, const float w, const int64_t n) {
+    if constexpr (std::is_same_v<T, vec4>) {
+      const Lanes4 w4 = Lanes4::splat(w);
+      for (int64_t i = 0; i < n; i++) {
+        (Lanes4::load(r_out[i]) + w4 * Lanes4::load(in_k[i])).store(r_out[i]);
+      }
+    }
+    else {
+      for (int64_t i = 0; i < n; i++) {
+        r_out[i] += w * in_k[i];
+      }
+    }
+  };
   parallel_for(planes, grain, [&](const IndexRange range) {
     for (int64_t p = range.start; p < range.one_after_last(); p++) {
       const int64_t start = p * plane_offset;
-      if (step == width) { /* the plane is one block */
-        std::copy(&values[start], &values[start] + length * width, &scratch[start]);
-      }
-      else {
-        for (int t = 0; t < length; t++) {
-          const int64_t row = start + t * step;
-          std::copy(&values[row], &values[row] + width, &scratch[row]);
-        }
-      }
       if (width == 1 && step == 1) {
-        /* Along x the plane is one row: the same sums, k outer and the row inner. */
-        T *out = &values[start];
-        const T *in = &scratch[start];
-        std::fill(out, out + length, T(0.0f));
+        T *row_out = &out[start];
+        const T *row_in = &in[start];
+        std::fill(row_out, row_out + length, T(0.0f));
         for (int k = -radius; k <= radius; k++) {
           const int t_lo = std::max(0, -k), t_hi = std::min(length, length - k);
-          if constexpr (std::is_same_v<T, vec4>) {
-            const Lanes4 w = Lanes4::splat(weights[k + radius]);
-            for (int t = t_lo; t < t_hi; t++) {
-              (Lanes4::load(out[t]) + w * Lanes4::load(in[t + k])).store(out[t]);
-            }
-          }
-          else {
-            const float w = weights[k + radius];
-            for (int t = t_lo; t < t_hi; t++) {
-              out[t] += w * in[t + k];
-            }
+          if (t_lo < t_hi) {
+            add_tap(row_out + t_lo, row_in + t_lo + k, weights[k + radius], t_hi - t_lo);
           }
         }
         continue;
       }
       for (int t = 0; t < length; t++) {
         const int k_lo = std::max(-radius, -t), k_hi = std::min(radius, length - 1 - t);
-        T *out = &values[start + t * step];
-        const T *in = &scratch[start + t * step];
-        /* Each value sums its taps from 0 in the order of k: along the rows (k outer) when a
-         * row is more than one value, else value by value. */
-        if (width > 1) {
-          std::fill(out, out + width, T(0.0f));
-          for (int k = k_lo; k <= k_hi; k++) {
-            const T *in_k = in + k * step;
-            if constexpr (std::is_same_v<T, vec4>) {
-              const Lanes4 w = Lanes4::splat(weights[k + radius]);
-              for (int64_t i = 0; i < width; i++) {
-                (Lanes4::load(out[i]) + w * Lanes4::load(in_k[i])).store(out[i]);
-              }
-            }
-            else {
-              const float w = weights[k + radius];
-              for (int64_t i = 0; i < width; i++) {
-                out[i] += w * in_k[i];
-              }
-            }
-          }
-          continue;
-        }
-        for (int64_t i = 0; i < width; i++) {
-          if constexpr (std::is_same_v<T, vec4>) {
-            Lanes4 sum = Lanes4::zero();
-            for (int k = k_lo; k <= k_hi; k++) {
-              sum = sum + Lanes4::splat(weights[k + radius]) * Lanes4::load(in[k * step + i]);
-            }
-            sum.store(out[i]);
-          }
-          else {
-            T sum(0.0f);
-            for (int k = k_lo; k <= k_hi; k++) {
-              sum += weights[k + radius] * in[k * step + i];
-            }
-            out[i] = sum;
-          }
+        T *row_out = &out[start + t * step];
+        std::fill(row_out, row_out + width, T(0.0f));
+        for (int k = k_lo; k <= k_hi; k++) {
+          add_tap(row_out, &in[start + (t + k) * step], weights[k + radius], width);
         }
       }
     }
@@ -323,9 +284,13 @@ void blur_binomial(const ivec3 &size, const int radius, const MutableSpan<T> val
   scratch.resize(size_t(values.size()));
   const MutableSpan<T> copy(scratch);
   const int64_t sx = size.x, sxy = int64_t(size.x) * size.y;
+  /* x into the scratch, y back, z into the scratch, which is copied back. */
   blur_axis<T>(weights, int64_t(size.y) * size.z, sx, size.x, 1, 1, values, copy);
-  blur_axis<T>(weights, size.z, sxy, size.y, sx, sx, values, copy);
+  blur_axis<T>(weights, size.z, sxy, size.y, sx, sx, copy, values);
   blur_axis<T>(weights, size.y, sx, size.z, sxy, sx, values, copy);
+  parallel_for(values.size(), grid_grain, [&](const IndexRange range) {
+    std::copy(&copy[range.start], &copy[range.start] + range.size, &values[range.start]);
+  });
 }
 
 template void blur_binomial<float>(const ivec3 &, int, MutableSpan<float>, std::vector<float> &);

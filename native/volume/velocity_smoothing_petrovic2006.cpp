@@ -21,10 +21,19 @@ void smooth_grid_velocity(const GridFrame &grid, const PointBins &bins,
         return vec4(velocities[i], 1.0f);
       },
       md, grids.splat_scratch);
-  grids.density_max = 0.0f;
-  for (const vec4 &m : grids.momentum_density) {
-    grids.density_max = std::max(grids.density_max, m.w);
-  }
+  /* The largest of eq. 1's Σ w (a maximum: the same on any thread count). */
+  grids.density_max = parallel_reduce(
+      vertices_num, grid_grain, 0.0f,
+      [&](const IndexRange range) {
+        float m = 0.0f;
+        for (int64_t v = range.start; v < range.one_after_last(); v++) {
+          m = std::max(m, md[v].w);
+        }
+        return m;
+      },
+      [](const float a, const float b) {
+        return std::max(a, b);
+      });
   /* B M and B D. */
   blur_binomial(grid.size, filter_radius, md, grids.scratch4);
   const MutableSpan<vec4> v_grid(grids.velocity);
