@@ -32,6 +32,33 @@ HeadBox head_box_keeping(const Span<vec3> positions_wo, const mat4 &world_to_hea
       positions_wo.size(), point_grain, HeadBox(),
       [&](const IndexRange range) {
         HeadBox box;
+#ifdef HAIRDYN_LANES4_SSE
+        /* transform_point and glm::min/max lane by lane, in glm's order of operations:
+         * (m0 x + m1 y) + (m2 z + m3 · 1), min(a, b) = b < a ? b : a. */
+        const __m128 m0 = _mm_loadu_ps(&world_to_head[0].x),
+                     m1 = _mm_loadu_ps(&world_to_head[1].x);
+        const __m128 m2 = _mm_loadu_ps(&world_to_head[2].x),
+                     m3 = _mm_loadu_ps(&world_to_head[3].x);
+        __m128 lo = _mm_set1_ps(box.lo.x), hi = _mm_set1_ps(box.hi.x);
+        for (int64_t i = range.start; i < range.one_after_last(); i++) {
+          const vec3 &q = positions_wo[i];
+          const __m128 sum = _mm_add_ps(
+              _mm_add_ps(_mm_mul_ps(m0, _mm_set1_ps(q.x)), _mm_mul_ps(m1, _mm_set1_ps(q.y))),
+              _mm_add_ps(_mm_mul_ps(m2, _mm_set1_ps(q.z)), m3));
+          float out[4];
+          _mm_storeu_ps(out, sum);
+          keep(i, vec3(out[0], out[1], out[2]));
+          if (is_finite(q)) {
+            lo = _mm_min_ps(sum, lo);
+            hi = _mm_max_ps(sum, hi);
+          }
+        }
+        float out_lo[4], out_hi[4];
+        _mm_storeu_ps(out_lo, lo);
+        _mm_storeu_ps(out_hi, hi);
+        box.lo = vec3(out_lo[0], out_lo[1], out_lo[2]);
+        box.hi = vec3(out_hi[0], out_hi[1], out_hi[2]);
+#else
         for (int64_t i = range.start; i < range.one_after_last(); i++) {
           const vec3 p = transform_point(world_to_head, positions_wo[i]);
           keep(i, p);
@@ -40,6 +67,7 @@ HeadBox head_box_keeping(const Span<vec3> positions_wo, const mat4 &world_to_hea
             box.hi = glm::max(box.hi, p);
           }
         }
+#endif
         return box;
       },
       [](HeadBox a, const HeadBox &b) {
@@ -54,15 +82,59 @@ void bin_by(const GridFrame &grid, const int64_t points_num, const HeadOf &head_
 {
   r_bins.vertex_of.resize(size_t(points_num));
   r_bins.fraction.resize(size_t(points_num));
+  if (grid.cells_num() == 0) {
+    std::fill(r_bins.vertex_of.begin(), r_bins.vertex_of.end(), -1);
+    std::fill(r_bins.fraction.begin(), r_bins.fraction.end(), vec3(0.0f));
+    return;
+  }
+  /* locate() with the grid's constants hoisted out of the loop (the same bits). */
+  const vec3 origin(grid.origin), last(grid.size - 1);
+  const ivec3 last_cell = grid.size - 2;
+  const int32_t dy = grid.size.x, dz = grid.size.x * grid.size.y; /* < max_grid_vertices */
+  const float cell_size = grid.cell_size;
+#ifdef HAIRDYN_LANES4_SSE
+  const __m128 origin4 = _mm_setr_ps(origin.x, origin.y, origin.z, 0.0f);
+  const __m128 last4 = _mm_setr_ps(last.x, last.y, last.z, 0.0f);
+  const __m128i last_cell4 = _mm_setr_epi32(last_cell.x, last_cell.y, last_cell.z, 0);
+#endif
   parallel_for(points_num, point_grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      ivec3 cell;
-      vec3 fraction(0.0f);
-      const bool inside = locate(grid, head_of(i) / grid.cell_size - vec3(grid.origin), cell,
-                                 fraction);
-      r_bins.vertex_of[size_t(i)] = inside ? int32_t(grid.vertex_index(cell.x, cell.y, cell.z)) :
-                                             -1;
-      r_bins.fraction[size_t(i)] = fraction;
+      const vec3 head = head_of(i);
+#ifdef HAIRDYN_LANES4_SSE
+      /* The same operations, lane by lane. */
+      const __m128 p = _mm_sub_ps(
+          _mm_div_ps(_mm_setr_ps(head.x, head.y, head.z, 0.0f), _mm_set1_ps(cell_size)), origin4);
+      const int inside =
+          _mm_movemask_ps(_mm_and_ps(_mm_cmpge_ps(p, _mm_setzero_ps()), _mm_cmple_ps(p, last4)));
+      if ((inside & 7) != 7) {
+        r_bins.vertex_of[size_t(i)] = -1;
+        r_bins.fraction[size_t(i)] = vec3(0.0f);
+        continue;
+      }
+      /* p ≥ 0: truncation is the floor; min(cell, last_cell) as glm::min on integers. */
+      const __m128i truncated = _mm_cvttps_epi32(p);
+      const __m128i cell =
+          _mm_xor_si128(last_cell4, _mm_and_si128(_mm_xor_si128(truncated, last_cell4),
+                                                  _mm_cmplt_epi32(truncated, last_cell4)));
+      alignas(16) int32_t c[4];
+      alignas(16) float f[4];
+      _mm_store_si128(reinterpret_cast<__m128i *>(c), cell);
+      _mm_store_ps(f, _mm_sub_ps(p, _mm_cvtepi32_ps(cell)));
+      r_bins.vertex_of[size_t(i)] = c[2] * dz + c[1] * dy + c[0];
+      r_bins.fraction[size_t(i)] = vec3(f[0], f[1], f[2]);
+#else
+      const vec3 p = head / cell_size - origin;
+      if (!(p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x <= last.x && p.y <= last.y &&
+            p.z <= last.z))
+      {
+        r_bins.vertex_of[size_t(i)] = -1;
+        r_bins.fraction[size_t(i)] = vec3(0.0f);
+        continue;
+      }
+      const ivec3 cell = glm::min(ivec3(p), last_cell); /* p ≥ 0: truncation is the floor */
+      r_bins.vertex_of[size_t(i)] = cell.z * dz + cell.y * dy + cell.x;
+      r_bins.fraction[size_t(i)] = p - vec3(cell);
+#endif
     }
   });
 }
@@ -142,34 +214,52 @@ void splat_density(const GridFrame &grid, const PointBins &bins, const MutableSp
 
 namespace {
 
-/* One axis of blur_binomial over `planes` planes of `length` × `width` values, plane p starting
- * at p · plane_offset, value (t, i) of a plane at t · step + i from its start; t runs along the
- * axis. A plane is copied to the same place in `scratch` and filtered back from there, so the
- * planes are independent and each is read while it is in cache. */
-template<typename T>
-void blur_axis(const Span<float> weights, const int64_t planes, const int64_t plane_offset,
-               const int length, const int64_t step, const int64_t width,
-               const MutableSpan<T> values, const MutableSpan<T> scratch)
+/* One axis of blur_binomial from `in` into `out` over `planes` planes of `length` × `width`
+ * values, plane p starting at p · plane_offset, value (t, i) of a plane at t · step + i from its
+ * start; t runs along the axis. Each value sums its taps from 0 in the order of k, k outer and
+ * the row inner (along x, where a row is one value, the whole plane is the row). */
+template<typename T> void blur_axis(const Span<float> weights, const int64_t planes,
+                                    const int64_t plane_offset, const int length,
+                                    const int64_t step, const int64_t width, const Span<T> in,
+                                    const MutableSpan<T> out)
 {
   const int radius = int(weights.size() / 2);
   const int64_t grain = std::max<int64_t>(1, blur_grain / (int64_t(length) * width));
+  /* out[i] = Σ_k w_k in_k[i] for i < n, the terms added to out. */
+  const auto add_tap = [](T *r_out, const T *in_k, const float w, const int64_t n) {
+    if constexpr (std::is_same_v<T, vec4>) {
+      const Lanes4 w4 = Lanes4::splat(w);
+      for (int64_t i = 0; i < n; i++) {
+        (Lanes4::load(r_out[i]) + w4 * Lanes4::load(in_k[i])).store(r_out[i]);
+      }
+    }
+    else {
+      for (int64_t i = 0; i < n; i++) {
+        r_out[i] += w * in_k[i];
+      }
+    }
+  };
   parallel_for(planes, grain, [&](const IndexRange range) {
     for (int64_t p = range.start; p < range.one_after_last(); p++) {
       const int64_t start = p * plane_offset;
-      for (int t = 0; t < length; t++) {
-        const int64_t row = start + t * step;
-        std::copy(&values[row], &values[row] + width, &scratch[row]);
+      if (width == 1 && step == 1) {
+        T *row_out = &out[start];
+        const T *row_in = &in[start];
+        std::fill(row_out, row_out + length, T(0.0f));
+        for (int k = -radius; k <= radius; k++) {
+          const int t_lo = std::max(0, -k), t_hi = std::min(length, length - k);
+          if (t_lo < t_hi) {
+            add_tap(row_out + t_lo, row_in + t_lo + k, weights[k + radius], t_hi - t_lo);
+          }
+        }
+        continue;
       }
       for (int t = 0; t < length; t++) {
         const int k_lo = std::max(-radius, -t), k_hi = std::min(radius, length - 1 - t);
-        T *out = &values[start + t * step];
-        std::fill(out, out + width, T(0.0f));
+        T *row_out = &out[start + t * step];
+        std::fill(row_out, row_out + width, T(0.0f));
         for (int k = k_lo; k <= k_hi; k++) {
-          const float w = weights[k + radius];
-          const T *in = &scratch[start + (t + k) * step];
-          for (int64_t i = 0; i < width; i++) {
-            out[i] += w * in[i];
-          }
+          add_tap(row_out, &in[start + (t + k) * step], weights[k + radius], width);
         }
       }
     }
@@ -194,9 +284,13 @@ void blur_binomial(const ivec3 &size, const int radius, const MutableSpan<T> val
   scratch.resize(size_t(values.size()));
   const MutableSpan<T> copy(scratch);
   const int64_t sx = size.x, sxy = int64_t(size.x) * size.y;
+  /* x into the scratch, y back, z into the scratch, which is copied back. */
   blur_axis<T>(weights, int64_t(size.y) * size.z, sx, size.x, 1, 1, values, copy);
-  blur_axis<T>(weights, size.z, sxy, size.y, sx, sx, values, copy);
+  blur_axis<T>(weights, size.z, sxy, size.y, sx, sx, copy, values);
   blur_axis<T>(weights, size.y, sx, size.z, sxy, sx, values, copy);
+  parallel_for(values.size(), grid_grain, [&](const IndexRange range) {
+    std::copy(&copy[range.start], &copy[range.start] + range.size, &values[range.start]);
+  });
 }
 
 template void blur_binomial<float>(const ivec3 &, int, MutableSpan<float>, std::vector<float> &);

@@ -15,11 +15,13 @@
 #include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "core/math.hh"
 #include "core/parallel.hh"
 #include "core/span.hh"
+#include "volume/lanes4.hh"
 
 namespace hairdyn {
 
@@ -162,11 +164,26 @@ void splat_to_grid(const GridFrame &grid, const PointBins &bins, const ValueFn &
         const T value = value_of(i);
         const float wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
         T *base = out + vertex;
-        for (int c = 0; c < 4; c++) {
-          const T row = (wy[c & 1] * wz[c >> 1]) * value;
-          T *at = base + (c & 1) * dy + (c >> 1) * dz;
-          at[0] += (1.0f - f.x) * row;
-          at[1] += f.x * row;
+        if constexpr (std::is_same_v<T, vec4>) {
+          /* The same operations lane by lane (lanes4.hh). */
+          /* Built from the values' registers: a 16-byte load of a vec4 just written in pieces
+           * would stall on store forwarding. */
+          const Lanes4 lanes = Lanes4::set(value.x, value.y, value.z, value.w);
+          const Lanes4 wx0 = Lanes4::splat(1.0f - f.x), wx1 = Lanes4::splat(f.x);
+          for (int c = 0; c < 4; c++) {
+            const Lanes4 row = Lanes4::splat(wy[c & 1] * wz[c >> 1]) * lanes;
+            T *at = base + (c & 1) * dy + (c >> 1) * dz;
+            (Lanes4::load(at[0]) + wx0 * row).store(at[0]);
+            (Lanes4::load(at[1]) + wx1 * row).store(at[1]);
+          }
+        }
+        else {
+          for (int c = 0; c < 4; c++) {
+            const T row = (wy[c & 1] * wz[c >> 1]) * value;
+            T *at = base + (c & 1) * dy + (c >> 1) * dz;
+            at[0] += (1.0f - f.x) * row;
+            at[1] += f.x * row;
+          }
         }
       }
     }
@@ -177,8 +194,15 @@ void splat_to_grid(const GridFrame &grid, const PointBins &bins, const ValueFn &
         const T *values = scratch.data() + (chunk - 1) * vertices_num;
         const int64_t lo = std::max(range.start, reach[chunk].start);
         const int64_t hi = std::min(range.one_after_last(), reach[chunk].one_after_last());
-        for (int64_t v = lo; v < hi; v++) {
-          r_grid[v] += values[v];
+        if constexpr (std::is_same_v<T, vec4>) {
+          for (int64_t v = lo; v < hi; v++) {
+            (Lanes4::load(r_grid[v]) + Lanes4::load(values[v])).store(r_grid[v]);
+          }
+        }
+        else {
+          for (int64_t v = lo; v < hi; v++) {
+            r_grid[v] += values[v];
+          }
         }
       }
     });
@@ -204,6 +228,23 @@ inline bool locate(const GridFrame &grid, const vec3 &p, ivec3 &r_cell, vec3 &r_
   return true;
 }
 
+/* sample_cell below on a grid of vec4, in lanes (lanes4.hh): the same bits. */
+inline Lanes4 sample_cell_lanes(const GridFrame &grid, const Span<vec4> values,
+                                const int64_t vertex, const vec3 &f)
+{
+  const int64_t dy = grid.size.x, dz = int64_t(grid.size.x) * grid.size.y;
+  const vec4 *v = values.data() + vertex;
+  const float wx[2] = { 1.0f - f.x, f.x }, wy[2] = { 1.0f - f.y, f.y },
+              wz[2] = { 1.0f - f.z, f.z };
+  const float wxy[4] = { wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1] };
+  Lanes4 sum = Lanes4::zero();
+  for (int c = 0; c < 8; c++) {
+    const int x = c & 1, y = (c >> 1) & 1, z = c >> 2;
+    sum = sum + Lanes4::splat(wxy[c & 3] * wz[z]) * Lanes4::load(v[x + y * dy + z * dz]);
+  }
+  return sum;
+}
+
 /* Trilinear interpolation (the tent weights of eq. 1 read back) in the cell whose lowest vertex
  * is `vertex`, at place `f` in it. */
 template<typename T>
@@ -212,12 +253,18 @@ T sample_cell(const GridFrame &grid, const Span<T> values, const int64_t vertex,
   const int64_t dy = grid.size.x, dz = int64_t(grid.size.x) * grid.size.y;
   const T *v = values.data() + vertex;
   const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
-  T sum(0.0f);
-  for (int c = 0; c < 8; c++) {
-    const int x = c & 1, y = (c >> 1) & 1, z = c >> 2;
-    sum += (wx[x] * wy[y] * wz[z]) * v[x + y * dy + z * dz];
+  const float wxy[4] = { wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1] };
+  if constexpr (std::is_same_v<T, vec4>) {
+    return sample_cell_lanes(grid, values, vertex, f).to_vec4();
   }
-  return sum;
+  else {
+    T sum(0.0f);
+    for (int c = 0; c < 8; c++) {
+      const int x = c & 1, y = (c >> 1) & 1, z = c >> 2;
+      sum += (wxy[c & 3] * wz[z]) * v[x + y * dy + z * dz];
+    }
+    return sum;
+  }
 }
 
 /* The same at grid coordinates `p`; T(0) outside the grid. */

@@ -16,23 +16,41 @@ void smooth_grid_velocity(const GridFrame &grid, const PointBins &bins,
   const MutableSpan<vec4> md(grids.momentum_density);
   /* §5.1: Σ w v and eq. 1's Σ w at each vertex, in one gather. */
   splat_to_grid<vec4>(
-      grid, bins, [&](const int64_t i) { return vec4(velocities[i], 1.0f); }, md,
-      grids.scratch4);
-  grids.density_max = 0.0f;
-  for (const vec4 &m : grids.momentum_density) {
-    grids.density_max = std::max(grids.density_max, m.w);
-  }
+      grid, bins,
+      [&](const int64_t i) {
+        return vec4(velocities[i], 1.0f);
+      },
+      md, grids.splat_scratch);
+  /* The largest of eq. 1's Σ w (a maximum: the same on any thread count). */
+  grids.density_max = parallel_reduce(
+      vertices_num, grid_grain, 0.0f,
+      [&](const IndexRange range) {
+        float m = 0.0f;
+        for (int64_t v = range.start; v < range.one_after_last(); v++) {
+          m = std::max(m, md[v].w);
+        }
+        return m;
+      },
+      [](const float a, const float b) {
+        return std::max(a, b);
+      });
   /* B M and B D. */
   blur_binomial(grid.size, filter_radius, md, grids.scratch4);
-  const MutableSpan<vec3> v_grid(grids.velocity);
+  const MutableSpan<vec4> v_grid(grids.velocity);
   parallel_for(vertices_num, grid_grain, [&](const IndexRange range) {
     for (int64_t v = range.start; v < range.one_after_last(); v++) {
-      const vec4 m = md[v];
-      v_grid[v] = m.w > 0.0f ? vec3(m) / m.w : vec3(0.0f);
+      const float w = md[v].w;
+      if (w > 0.0f) {
+        (Lanes4::load(md[v]) / Lanes4::splat(w)).store(v_grid[v]); /* vec3(m) / m.w */
+        v_grid[v].w = 0.0f;
+      }
+      else {
+        v_grid[v] = vec4(0.0f);
+      }
     }
   });
   /* B V. */
-  blur_binomial(grid.size, filter_radius, v_grid, grids.scratch3);
+  blur_binomial(grid.size, filter_radius, v_grid, grids.scratch4);
 }
 
 void drag_toward(const GridFrame &grid, const PointBins &bins, const VelocityGrids &grids,

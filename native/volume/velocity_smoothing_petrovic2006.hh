@@ -29,9 +29,9 @@ namespace hairdyn {
 /* Scratch grids of the smoothing, kept between substeps to avoid reallocation. */
 struct VelocityGrids {
   std::vector<vec4> momentum_density; /* (Σ w v, Σ w) per vertex, then filtered */
-  std::vector<vec3> velocity;         /* V per vertex, then filtered */
-  std::vector<vec4> scratch4;
-  std::vector<vec3> scratch3;
+  std::vector<vec4> velocity; /* V per vertex (w unused: four lanes, lanes4.hh), then filtered */
+  std::vector<vec4> splat_scratch; /* the splat's chunk grids */
+  std::vector<vec4> scratch4;      /* the filter's */
   float density_max = 0.0f; /* eq. 1's largest value on the grid, before filtering */
 };
 
@@ -46,9 +46,9 @@ inline vec3 grid_velocity_at(const GridFrame &grid, const VelocityGrids &grids,
                              const PointBins &bins, const int64_t i, const vec3 &v)
 {
   const int32_t vertex = bins.vertex_of[size_t(i)];
-  return vertex < 0 ? v :
-                      sample_cell(grid, Span<vec3>(grids.velocity), vertex,
-                                  bins.fraction[size_t(i)]);
+  return vertex < 0 ? v
+                    : vec3(sample_cell(grid, Span<vec4>(grids.velocity), vertex,
+                                       bins.fraction[size_t(i)]));
 }
 
 /* §5.1's drag toward the grid velocity of smooth_grid_velocity: v ← v + s (V − v) for every point
