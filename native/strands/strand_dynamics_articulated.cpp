@@ -86,6 +86,7 @@ struct Body {
   rvec3 u_angular[2], u_linear[2]; /* U = I^A S, one column per hinge axis */
   rmat2 d_inverse;
   rvec2 u;                   /* τ − Sᵀ p^A */
+  vec3 t, e_theta, pole;     /* the segment's direction, frame[1] and its chart's x axis */
   bool touches;              /* the segment's tip is inside a collider: at `contact` */
   Contact contact;
 };
@@ -259,24 +260,30 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
     Body &body = bodies[i - first];
     const float d = rest_lengths_[i];
     const float m = density * d;
-    const mat3 chart = frame * rest_rotations_[i];
-    const Deflection deflection(trig_[i]);
-    frame = deflection.rotate(chart);
-    const vec3 t = frame[2];
-    body.s_theta = real(frame[1]);
-    body.s_phi = -real(chart[0]);
+    if (predictor) { /* the shape: the step's stage has the same */
+      const mat3 chart = frame * rest_rotations_[i];
+      frame = Deflection(trig_[i]).rotate(chart);
+      body.t = frame[2];
+      body.e_theta = frame[1];
+      body.pole = chart[0];
+      body.s_theta = real(frame[1]);
+      body.s_phi = -real(chart[0]);
+      body.arm = real(arm);
+      body.reach = real(d * body.t);
+    }
+    const vec3 t = body.t;
     const vec2 rate = angular_velocities_[i] + (0.5f * h) * mid_accelerations[i - first];
-    const vec3 relative_turn = rate.x * frame[1] - rate.y * chart[0];
-    body.arm = real(arm);
-    body.reach = real(d * t);
+    const vec3 relative_turn = rate.x * body.e_theta - rate.y * body.pole;
     body.bias_angular = glm::cross(real(parent_omega), real(relative_turn)) -
-                        double(rate.x * rate.y) * glm::cross(real(chart[0]), body.s_theta);
+                        double(rate.x * rate.y) * glm::cross(real(body.pole), body.s_theta);
     body.bias_linear = glm::cross(real(parent_omega), glm::cross(real(parent_omega), body.arm));
     node += arm;
     node_velocity += glm::cross(parent_omega, arm);
     const vec3 omega = parent_omega + relative_turn;
-    fastest_turn =
-        std::max(fastest_turn, std::max(glm::length(omega), glm::length(relative_turn)));
+    if (predictor) {
+      fastest_turn =
+          std::max(fastest_turn, std::max(glm::length(omega), glm::length(relative_turn)));
+    }
 
     /* The external force at the centre (Kurihara 1993, eq. 6; reaction constraint eq. 12–15
      * where the tip is inside a collider), from world velocities. */
