@@ -292,8 +292,9 @@ PenetrationStats ColliderSet::penetration_stats(const Span<vec3> points_wo,
 }
 
 /* One batch of the parallel query, compiled twice (chosen when the module loads): for AVX2
- * (8 lanes, gathers) and for the x86-64 baseline (SSE2, 4 lanes). The same IEEE operations in
- * the same order (no FMA: -std=c++17 leaves contraction off), so both give the same bits. */
+ * (8 lanes; the cells' blend is 4 lanes in both) and for the x86-64 baseline (SSE2, 4 lanes).
+ * The same IEEE operations in the same order (no FMA: -std=c++17 leaves contraction off), so
+ * both give the same bits. */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
 __attribute__((target_clones("avx2", "default")))
 #endif

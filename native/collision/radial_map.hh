@@ -58,7 +58,9 @@ constexpr int64_t map_batch_size = 256;
 
 /* A batch of map look-ups as a structure of arrays, so that each stage of the look-up is one
  * branch-free loop the compiler vectorises: (1) table coordinates and cell indices, (2) the
- * gather of the four cells (the only scalar stage), (3) eq. 9–11. The per-point calls run the
+ * gather of the four cells (SSE by hand, four points at a time), (3) eq. 9–11. The loops
+ * vectorise only with -fno-trapping-math (set for collider.cpp in CMakeLists.txt): with
+ * trapping math GCC keeps the selects as branches. The per-point calls run the
  * same code with N = 1. Inputs x, y, z (map space); outputs valid, inside, depth, nx, ny, nz
  * (read only where valid). NaN or infinite inputs are never valid and never index out of the
  * table. */
