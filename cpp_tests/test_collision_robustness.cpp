@@ -6,11 +6,13 @@
  * the same bits as the per-point query. */
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <limits>
 #include <random>
 
 #include "collision/collider.hh"
 #include "collision_test_shapes.hh"
+#include "core/parallel.hh"
 
 using namespace hairdyn;
 using namespace hairdyn::test;
@@ -33,13 +35,15 @@ std::shared_ptr<Collider> sphere_collider(const MapKind kind, const float radius
 /* Coordinates a query may meet: special values, the edges of float's range, and ordinary ones. */
 std::vector<vec3> hostile_points(const float scale)
 {
-  const float values[] = {nan_f, -nan_f, inf_f, -inf_f, max_f, -max_f, 1e19f, -1e19f, 1e38f,
-                          std::numeric_limits<float>::denorm_min(), 0.0f, -0.0f,
-                          0.5f * scale, -0.3f * scale, 2.0f * scale};
+  const float values[] = {
+    nan_f,  -nan_f, inf_f,        -inf_f,        max_f,
+    -max_f, 1e19f,  -1e19f,       1e38f,         std::numeric_limits<float>::denorm_min(),
+    0.0f,   -0.0f,  0.5f * scale, -0.3f * scale, 2.0f * scale
+  };
   std::vector<vec3> points;
   for (const float x : values) {
     for (const float y : values) {
-      for (const float z : {values[0], values[2], values[6], values[10], values[12]}) {
+      for (const float z : { values[0], values[2], values[6], values[10], values[12] }) {
         points.emplace_back(x, y, z);
         points.emplace_back(z, x, y);
         points.emplace_back(y, z, x);
@@ -65,7 +69,10 @@ int64_t check_queries(const ColliderSet &set, const std::vector<vec3> &points)
     const bool found = set.find_contact(points[i], contact);
     EXPECT_EQ(found, hit[i] != 0) << "point " << i;
     if (!found) {
+      /* Inside nothing: depth 0, normal 0 and the point itself (NaN included: by the bits). */
       EXPECT_EQ(depth[i], 0.0f);
+      EXPECT_EQ(normal[i], vec3(0.0f)) << "point " << i;
+      EXPECT_EQ(std::memcmp(&surface[i], &points[i], sizeof(vec3)), 0) << "point " << i;
       continue;
     }
     hits++;
@@ -86,7 +93,7 @@ int64_t check_queries(const ColliderSet &set, const std::vector<vec3> &points)
 
 TEST(CollisionRobustness, NonFiniteAndHugePointsNeverIndexOutsideTheTable)
 {
-  for (const MapKind kind : {MapKind::Cylinder, MapKind::Sphere}) {
+  for (const MapKind kind : { MapKind::Cylinder, MapKind::Sphere }) {
     ColliderSet set;
     set.add(sphere_collider(kind));
     const std::vector<vec3> points = hostile_points(1.0f);
@@ -99,7 +106,7 @@ TEST(CollisionRobustness, NonFiniteAndHugePointsNeverIndexOutsideTheTable)
 
 TEST(CollisionRobustness, ColliderScaledToZeroOrSingularFindsNoContact)
 {
-  for (const MapKind kind : {MapKind::Cylinder, MapKind::Sphere}) {
+  for (const MapKind kind : { MapKind::Cylinder, MapKind::Sphere }) {
     const auto collider = sphere_collider(kind);
     ColliderSet set;
     set.add(collider);
@@ -108,7 +115,7 @@ TEST(CollisionRobustness, ColliderScaledToZeroOrSingularFindsNoContact)
     flattened[1] = vec4(0.0f);
     mat4 one_axis_zero = glm::scale(mat4(1.0f), vec3(1.0f, 0.0f, 1.0f));
     one_axis_zero[3] = vec4(2.0f, 0.0f, 0.0f, 1.0f);
-    for (const mat4 &m : {zero_scale, flattened, one_axis_zero}) {
+    for (const mat4 &m : { zero_scale, flattened, one_axis_zero }) {
       collider->set_transform(m);
       std::vector<vec3> points = hostile_points(1.0f);
       points.emplace_back(0.0f);
@@ -130,7 +137,7 @@ TEST(CollisionRobustness, HugeCollidersAreRefusedOrAnswer)
   const TestMesh huge = uv_sphere(1e19f, 24, 13);
   EXPECT_NE(find_mesh_error(huge.vertices, huge.triangles).find("farther than"),
             std::string::npos);
-  for (const MapKind kind : {MapKind::Auto, MapKind::Cylinder, MapKind::Sphere}) {
+  for (const MapKind kind : { MapKind::Auto, MapKind::Cylinder, MapKind::Sphere }) {
     ColliderSet set;
     set.add(sphere_collider(kind, 0.5f * max_mesh_coordinate));
     check_queries(set, hostile_points(0.5f * max_mesh_coordinate));
@@ -178,12 +185,65 @@ TEST(CollisionRobustness, RandomTransformsAndPointsAgreeBatchedAndPerPoint)
     b->set_transform(trial % 2 ? m : mat4(1.0f));
     std::vector<vec3> points(600);
     for (size_t i = 0; i < points.size(); i++) {
-      points[i] = i % 3 == 0 ? vec3(wild(), wild(), wild()) :
-                               vec3(unit(rng), unit(rng), unit(rng)) * 1.2f;
+      points[i] =
+          i % 3 == 0 ? vec3(wild(), wild(), wild()) : vec3(unit(rng), unit(rng), unit(rng)) * 1.2f;
     }
     hits += check_queries(set, points);
   }
   EXPECT_GT(hits, 100); /* The ordinary trials found contacts, and they agreed. */
+}
+
+TEST(CollisionRobustness, BatchedQueryHasTheSameBitsOnOneAndTwoThreads)
+{
+  /* Many points in a shell around two overlapping spheres (a cylinder map and a sphere map),
+   * with a similarity placement and a sheared one (the two ways depth and normal are taken
+   * to world space): several parallel chunks and a partial last batch. Every answer equals the
+   * per-point query's, and one and two threads give the same bits. */
+  std::mt19937 rng(11);
+  std::normal_distribution<float> gauss;
+  std::uniform_real_distribution<float> radius(0.0f, 1.3f);
+  std::vector<vec3> points(3 * 4096 + 1000);
+  for (vec3 &p : points) {
+    p = glm::normalize(vec3(gauss(rng), gauss(rng), gauss(rng))) * radius(rng);
+  }
+  /* Points on the axes and poles of the maps. */
+  for (const float r : { 0.0f, 0.3f, 0.9f }) {
+    points.emplace_back(0.0f, r, 0.0f);
+    points.emplace_back(0.0f, -r, 0.0f);
+  }
+  mat4 shear(1.0f);
+  shear[1][0] = 0.3f;
+  const mat4 similarity =
+      glm::scale(glm::rotate(glm::translate(mat4(1.0f), vec3(0.1f, -0.2f, 0.05f)), 0.7f,
+                             glm::normalize(vec3(1, 2, 3))),
+                 vec3(1.2f));
+  for (const mat4 &m : { similarity, shear }) {
+    const auto a = sphere_collider(MapKind::Cylinder);
+    const auto b = sphere_collider(MapKind::Sphere, 0.8f);
+    a->set_transform(m);
+    b->set_transform(glm::translate(mat4(1.0f), vec3(0.2f, 0.1f, 0.0f)));
+    ColliderSet set;
+    set.add(a);
+    set.add(b);
+    const size_t n = points.size();
+    std::vector<uint8_t> hit[2] = { std::vector<uint8_t>(n), std::vector<uint8_t>(n) };
+    std::vector<float> depth[2] = { std::vector<float>(n), std::vector<float>(n) };
+    std::vector<vec3> normal[2] = { std::vector<vec3>(n), std::vector<vec3>(n) };
+    std::vector<vec3> surface[2] = { std::vector<vec3>(n), std::vector<vec3>(n) };
+    for (const int threads : { 1, 2 }) {
+      set_thread_num(threads);
+      const int r = threads - 1;
+      find_contacts(set, points, hit[r], depth[r], normal[r], surface[r]);
+    }
+    set_thread_num(0);
+    EXPECT_EQ(hit[0], hit[1]);
+    EXPECT_EQ(std::memcmp(depth[0].data(), depth[1].data(), n * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(normal[0].data(), normal[1].data(), n * sizeof(vec3)), 0);
+    EXPECT_EQ(std::memcmp(surface[0].data(), surface[1].data(), n * sizeof(vec3)), 0);
+    const int64_t hits = check_queries(set, points);
+    EXPECT_GT(hits, int64_t(n / 4));
+    EXPECT_LT(hits, int64_t(n));
+  }
 }
 
 TEST(CollisionRobustness, PenetrationReportsRootsInsideApart)
@@ -193,9 +253,9 @@ TEST(CollisionRobustness, PenetrationReportsRootsInsideApart)
    * and its middle point 0.05 inside. */
   ColliderSet set;
   set.add(sphere_collider(MapKind::Auto));
-  const std::vector<vec3> points = {{0.9f, 0, 0}, {1.2f, 0, 0}, {1.5f, 0, 0},
-                                    {0, 1.1f, 0}, {0, 0.95f, 0}, {0, 1.3f, 0}};
-  const std::vector<int32_t> offsets = {0, 3, 6};
+  const std::vector<vec3> points = { { 0.9f, 0, 0 }, { 1.2f, 0, 0 },  { 1.5f, 0, 0 },
+                                     { 0, 1.1f, 0 }, { 0, 0.95f, 0 }, { 0, 1.3f, 0 } };
+  const std::vector<int32_t> offsets = { 0, 3, 6 };
   const float tolerance = 0.01f;
   const PenetrationStats all = set.penetration_stats(points, tolerance);
   EXPECT_EQ(all.points_num, 6);

@@ -88,7 +88,8 @@ std::string find_collider_error(const ColliderMesh &mesh, const Span<int32_t> pa
       }
     }
     if (!has_triangle) {
-      msg << "part " << p << " selects no triangle (a triangle needs all three of its vertices in the part)";
+      msg << "part " << p
+          << " selects no triangle (a triangle needs all three of its vertices in the part)";
       return msg.str();
     }
   }
@@ -97,10 +98,10 @@ std::string find_collider_error(const ColliderMesh &mesh, const Span<int32_t> pa
 
 Collider::Collider(const ColliderMesh &mesh, const Span<int32_t> part_offsets,
                    const Span<int32_t> part_vertices, const CollisionParams &params,
-                   const Span<MapFrame> part_frames)
-    : params_(params),
-      boundary_edges_num_(mesh.boundary_edges_num()),
-      skipped_triangles_num_(mesh.skipped_triangles_num())
+                   const Span<MapFrame> part_frames) :
+    params_(params),
+    boundary_edges_num_(mesh.boundary_edges_num()),
+    skipped_triangles_num_(mesh.skipped_triangles_num())
 {
   assert(find_collider_error(mesh, part_offsets, part_vertices, part_frames.size()).empty());
   const auto start = std::chrono::steady_clock::now();
@@ -141,7 +142,8 @@ Collider::Collider(const ColliderMesh &mesh, const Span<int32_t> part_offsets,
     }
     if (!part_frames.is_empty()) {
       part.explicit_frame = true;
-      part.frame = make_frame(part_frames[p].origin, part_frames[p].axis, part_frames[p].reference);
+      part.frame =
+          make_frame(part_frames[p].origin, part_frames[p].axis, part_frames[p].reference);
     }
   }
   for (Part &part : parts_) {
@@ -150,7 +152,8 @@ Collider::Collider(const ColliderMesh &mesh, const Span<int32_t> part_offsets,
   exact_ = MeshDistance(vertices_, triangles_);
   size_ = glm::length(exact_.bvh().bounds_max() - exact_.bvh().bounds_min());
   set_transform(object_to_world_);
-  build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  build_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 MapFrame Collider::part_frame(const Part &part) const
@@ -160,15 +163,15 @@ MapFrame Collider::part_frame(const Part &part) const
   }
   const MapFrame fitted = fit_frame(vertices_, part.triangles);
   switch (params_.axis_mode) {
-    case AxisMode::ObjectX:
-      return make_frame(fitted.origin, vec3(1, 0, 0), vec3(0, 1, 0));
-    case AxisMode::ObjectY:
-      return make_frame(fitted.origin, vec3(0, 1, 0), vec3(0, 0, 1));
-    case AxisMode::ObjectZ:
-      return make_frame(fitted.origin, vec3(0, 0, 1), vec3(1, 0, 0));
-    case AxisMode::Fitted:
-    default:
-      return fitted;
+  case AxisMode::ObjectX:
+    return make_frame(fitted.origin, vec3(1, 0, 0), vec3(0, 1, 0));
+  case AxisMode::ObjectY:
+    return make_frame(fitted.origin, vec3(0, 1, 0), vec3(0, 0, 1));
+  case AxisMode::ObjectZ:
+    return make_frame(fitted.origin, vec3(0, 0, 1), vec3(1, 0, 0));
+  case AxisMode::Fitted:
+  default:
+    return fitted;
   }
 }
 
@@ -193,8 +196,8 @@ void Collider::build_part(Part &part, const bool choose_kind)
    * surface, measured 2% of the part's size inside and outside its triangles. */
   const MeshDistance exact(vertices_, part.triangles);
   const float part_size = glm::length(bvh.bounds_max() - bvh.bounds_min());
-  const std::vector<vec3> points = error_sample_points(vertices_, part.triangles,
-                                                       0.02f * part_size, 2000);
+  const std::vector<vec3> points =
+      error_sample_points(vertices_, part.triangles, 0.02f * part_size, 2000);
   part.cylinder_error = mean_depth_error(part.map.cylinder, exact, points);
   part.sphere_error = mean_depth_error(part.map.sphere, exact, points);
   if (part.sphere_error < part.cylinder_error) {
@@ -218,7 +221,8 @@ void Collider::rebuild(const Span<vec3> vertices_object)
   exact_ = MeshDistance(vertices_, triangles_);
   size_ = glm::length(exact_.bvh().bounds_max() - exact_.bvh().bounds_min());
   set_transform(object_to_world_);
-  build_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  build_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 void Collider::set_transform(const mat4 &object_to_world)
@@ -278,7 +282,8 @@ PenetrationStats ColliderSet::penetration_stats(const Span<vec3> points_wo,
     }
     roots_inside += depths[size_t(root)] > tolerance_wo ? 1 : 0;
     roots_depth_max = std::max(roots_depth_max, depths[size_t(root)]);
-    others.insert(others.end(), depths.begin() + root + 1, depths.begin() + curve_offsets[curve + 1]);
+    others.insert(others.end(), depths.begin() + root + 1,
+                  depths.begin() + curve_offsets[curve + 1]);
   }
   PenetrationStats stats = hairdyn::penetration_stats(others, tolerance_wo);
   stats.roots_inside = roots_inside;
@@ -287,14 +292,15 @@ PenetrationStats ColliderSet::penetration_stats(const Span<vec3> points_wo,
 }
 
 /* One batch of the parallel query, compiled twice (chosen when the module loads): for AVX2
- * (8 lanes, gathers) and for the x86-64 baseline (SSE2, 4 lanes). The same IEEE operations in
- * the same order (no FMA: -std=c++17 leaves contraction off), so both give the same bits. */
+ * (8 lanes; the cells' blend is 4 lanes in both) and for the x86-64 baseline (SSE2, 4 lanes).
+ * The same IEEE operations in the same order (no FMA: -std=c++17 leaves contraction off), so
+ * both give the same bits. */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-static void find_contacts_batch(const ColliderSet &colliders,
-                                ContactBatch<map_batch_size> &contacts,
-                                MapBatch<map_batch_size> &scratch)
+static void
+find_contacts_batch(const ColliderSet &colliders, ContactBatch<map_batch_size> &contacts,
+                    MapBatch<map_batch_size> &scratch)
 {
   colliders.accumulate_contacts(contacts, scratch);
 }
@@ -312,13 +318,7 @@ void find_contacts(const ColliderSet &colliders, const Span<vec3> points_wo,
       contacts->load(points_wo.slice(start, size));
       find_contacts_batch(colliders, *contacts, *scratch);
       /* A point inside nothing keeps what load() set: depth 0, normal 0, itself. */
-      for (int64_t k = 0; k < size; k++) {
-        const int64_t i = start + k;
-        r_hit[i] = uint8_t(contacts->hit[k]);
-        r_depth[i] = contacts->depth[k];
-        r_normal_wo[i] = vec3(contacts->nx[k], contacts->ny[k], contacts->nz[k]);
-        r_surface_point_wo[i] = vec3(contacts->sx[k], contacts->sy[k], contacts->sz[k]);
-      }
+      contacts->store(start, r_hit, r_depth, r_normal_wo, r_surface_point_wo);
     }
   });
 }

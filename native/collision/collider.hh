@@ -32,26 +32,28 @@ struct PartMap {
   CylinderMap cylinder;
   SphereMap sphere;
 
-  const MapFrame &frame() const { return kind == MapKind::Sphere ? sphere.frame() : cylinder.frame(); }
+  const MapFrame &frame() const
+  {
+    return kind == MapKind::Sphere ? sphere.frame() : cylinder.frame();
+  }
   bool evaluate(const vec3 &p_object, MapSample &r_sample) const
   {
-    return kind == MapKind::Sphere ? sphere.evaluate(p_object, r_sample) :
-                                     cylinder.evaluate(p_object, r_sample);
+    return kind == MapKind::Sphere ? sphere.evaluate(p_object, r_sample)
+                                   : cylinder.evaluate(p_object, r_sample);
   }
   bool find_contact_map(const vec3 &p_map, MapSample &r_sample) const
   {
-    return kind == MapKind::Sphere ? sphere.find_contact_map(p_map, r_sample) :
-                                     cylinder.find_contact_map(p_map, r_sample);
+    return kind == MapKind::Sphere ? sphere.find_contact_map(p_map, r_sample)
+                                   : cylinder.find_contact_map(p_map, r_sample);
   }
   /* The map kind is resolved once per batch. */
-  template<int64_t N>
-  HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b, const bool inside_only) const
+  template<bool inside_only, int64_t N> HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b) const
   {
     if (kind == MapKind::Sphere) {
-      sphere.sample(b, inside_only);
+      sphere.template sample<inside_only>(b);
     }
     else {
-      cylinder.sample(b, inside_only);
+      cylinder.template sample<inside_only>(b);
     }
   }
 };
@@ -69,6 +71,39 @@ HAIRDYN_BATCH_INLINE float select_bits(const int32_t mask, const float a, const 
   return result;
 }
 
+#if defined(__SSE2__)
+static_assert(sizeof(vec3) == 12, "packed vec3: four of them are three 16-byte vectors");
+
+/* Four packed vec3 (x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3) as the vectors x, y, z. */
+HAIRDYN_BATCH_INLINE void load_xyz4(const vec3 *p, __m128 &r_x, __m128 &r_y, __m128 &r_z)
+{
+  const float *f = &p->x;
+  const __m128 a = _mm_loadu_ps(f), b = _mm_loadu_ps(f + 4), c = _mm_loadu_ps(f + 8);
+  const __m128 x2y2z2x3 = _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 0, 3, 2));
+  r_x = _mm_shuffle_ps(a, x2y2z2x3, _MM_SHUFFLE(3, 0, 3, 0));
+  const __m128 y0y1 = _mm_shuffle_ps(a, b, _MM_SHUFFLE(0, 0, 1, 1));
+  const __m128 y2y3 = _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3));
+  r_y = _mm_shuffle_ps(y0y1, y2y3, _MM_SHUFFLE(2, 0, 2, 0));
+  const __m128 z0z1 = _mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2));
+  const __m128 z2z3 = _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0));
+  r_z = _mm_shuffle_ps(z0z1, z2z3, _MM_SHUFFLE(2, 0, 2, 0));
+}
+
+/* The inverse of load_xyz4. */
+HAIRDYN_BATCH_INLINE void store_xyz4(vec3 *p, const __m128 x, const __m128 y, const __m128 z)
+{
+  float *f = &p->x;
+  const __m128 xy01 = _mm_unpacklo_ps(x, y), xy23 = _mm_unpackhi_ps(x, y);
+  const __m128 z0x1 = _mm_shuffle_ps(z, xy01, _MM_SHUFFLE(2, 2, 0, 0));
+  _mm_storeu_ps(f, _mm_shuffle_ps(xy01, z0x1, _MM_SHUFFLE(2, 0, 1, 0)));
+  const __m128 y1z1 = _mm_shuffle_ps(xy01, z, _MM_SHUFFLE(1, 1, 3, 3));
+  _mm_storeu_ps(f + 4, _mm_shuffle_ps(y1z1, xy23, _MM_SHUFFLE(1, 0, 2, 0)));
+  const __m128 z2x3 = _mm_shuffle_ps(z, xy23, _MM_SHUFFLE(2, 2, 2, 2));
+  const __m128 y3z3 = _mm_shuffle_ps(xy23, z, _MM_SHUFFLE(3, 3, 3, 3));
+  _mm_storeu_ps(f + 8, _mm_shuffle_ps(z2x3, y3z3, _MM_SHUFFLE(2, 0, 2, 0)));
+}
+#endif
+
 /* The deepest contacts found so far for a batch of world points (structure of arrays, as
  * MapBatch): hit, depth, normal n and surface point s, world space. */
 template<int64_t N> struct ContactBatch {
@@ -80,15 +115,55 @@ template<int64_t N> struct ContactBatch {
   void load(const Span<vec3> points_wo)
   {
     size = points_wo.size();
-    for (int64_t k = 0; k < size; k++) {
+    int64_t k = 0;
+#if defined(__SSE2__)
+    for (; N >= 4 && k + 4 <= size; k += 4) {
+      __m128 x, y, z;
+      load_xyz4(points_wo.data() + k, x, y, z);
+      _mm_storeu_ps(px + k, x);
+      _mm_storeu_ps(py + k, y);
+      _mm_storeu_ps(pz + k, z);
+    }
+#endif
+    for (; k < size; k++) {
       px[k] = points_wo[k].x;
       py[k] = points_wo[k].y;
       pz[k] = points_wo[k].z;
+    }
+    for (k = 0; k < size; k++) {
       hit[k] = 0;
       depth[k] = nx[k] = ny[k] = nz[k] = 0.0f;
       sx[k] = px[k];
       sy[k] = py[k];
       sz[k] = pz[k];
+    }
+  }
+  /* Writes the batch to the outputs of find_contacts, from index `start` on. */
+  void store(const int64_t start, const MutableSpan<uint8_t> r_hit,
+             const MutableSpan<float> r_depth, const MutableSpan<vec3> r_normal_wo,
+             const MutableSpan<vec3> r_surface_point_wo) const
+  {
+    int64_t k = 0;
+#if defined(__SSE2__)
+    for (; N >= 4 && k + 4 <= size; k += 4) {
+      const int64_t i = start + k;
+      const __m128i h = _mm_loadu_si128(reinterpret_cast<const __m128i *>(hit + k));
+      const __m128i h16 = _mm_packs_epi32(h, h);
+      const int32_t h8 = _mm_cvtsi128_si32(_mm_packus_epi16(h16, h16));
+      std::memcpy(r_hit.data() + i, &h8, 4);
+      _mm_storeu_ps(r_depth.data() + i, _mm_loadu_ps(depth + k));
+      store_xyz4(r_normal_wo.data() + i, _mm_loadu_ps(nx + k), _mm_loadu_ps(ny + k),
+                 _mm_loadu_ps(nz + k));
+      store_xyz4(r_surface_point_wo.data() + i, _mm_loadu_ps(sx + k), _mm_loadu_ps(sy + k),
+                 _mm_loadu_ps(sz + k));
+    }
+#endif
+    for (; k < size; k++) {
+      const int64_t i = start + k;
+      r_hit[i] = uint8_t(hit[k]);
+      r_depth[i] = depth[k];
+      r_normal_wo[i] = vec3(nx[k], ny[k], nz[k]);
+      r_surface_point_wo[i] = vec3(sx[k], sy[k], sz[k]);
     }
   }
   bool read(const int64_t k, Contact &r_contact) const
@@ -111,8 +186,8 @@ std::vector<vec3> error_sample_points(Span<vec3> vertices, Span<ivec3> triangles
 /* Mean |map depth - exact depth| over points (object space), in object units. Where the map
  * is undefined (out of range, empty cells) a point inside the mesh counts its full depth (a
  * missed collision) and a point outside counts 0. Map: CylinderMap, SphereMap or PartMap. */
-template<typename Map>
-float mean_depth_error(const Map &map, const MeshDistance &exact, const Span<vec3> points_object)
+template<typename Map> float mean_depth_error(const Map &map, const MeshDistance &exact,
+                                              const Span<vec3> points_object)
 {
   double sum = 0.0;
   for (const vec3 &p : points_object) {
@@ -129,8 +204,8 @@ float mean_depth_error(const Map &map, const MeshDistance &exact, const Span<vec
 }
 
 /* The per-point query of a Collider or a ColliderSet: the batched query with a batch of one. */
-template<typename Colliders>
-bool find_contact_of(const Colliders &colliders, const vec3 &p_wo, Contact &r_contact)
+template<typename Colliders> bool find_contact_of(const Colliders &colliders, const vec3 &p_wo,
+                                                  Contact &r_contact)
 {
   ContactBatch<1> contacts;
   contacts.load(Span<vec3>(&p_wo, 1));
@@ -141,10 +216,10 @@ bool find_contact_of(const Colliders &colliders, const vec3 &p_wo, Contact &r_co
 
 /* A rigid or affine map between spaces, applied as linear * p + translation. */
 struct Affine {
-  mat3 linear{1.0f};
-  vec3 translation{0.0f};
+  mat3 linear{ 1.0f };
+  vec3 translation{ 0.0f };
   vec3 apply(const vec3 &p) const { return linear * p + translation; }
-  static Affine from(const mat4 &m) { return {mat3(m), vec3(m[3])}; }
+  static Affine from(const mat4 &m) { return { mat3(m), vec3(m[3]) }; }
 };
 
 class Collider {
@@ -171,9 +246,8 @@ class Collider {
 
   /* Updates each point of `contacts` that is inside a part deeper than its contact so far
    * (the batched query: per part, one pass of each stage over the batch). */
-  template<int64_t N>
-  HAIRDYN_BATCH_INLINE void accumulate_contacts(ContactBatch<N> &contacts,
-                                                MapBatch<N> &scratch) const
+  template<int64_t N> HAIRDYN_BATCH_INLINE void accumulate_contacts(ContactBatch<N> &contacts,
+                                                                    MapBatch<N> &scratch) const
   {
     const int64_t size = contacts.size;
     scratch.size = size;
@@ -186,48 +260,18 @@ class Collider {
         scratch.y[k] = l[0][1] * x + l[1][1] * y + l[2][1] * z + t.y;
         scratch.z[k] = l[0][2] * x + l[1][2] * y + l[2][2] * z + t.z;
       }
-      part.map.sample(scratch, true);
+      part.map.template sample<true>(scratch);
       if constexpr (N == 1) {
         if (!scratch.valid[0]) {
           continue;
         }
       }
-      const mat3 m = part.map_to_world.linear;
-      const vec3 mt = part.map_to_world.translation;
-      const mat3 nm = part.normal_to_world;
-      const float scale = similarity_scale_;
-      for (int64_t k = 0; k < size; k++) {
-        /* T in world space; a similarity (rotation, translation, uniform scale) keeps
-         * distances and normals up to the scale, other affine maps need the lengths measured
-         * again. */
-        const float d = scratch.depth[k];
-        const float mx = scratch.x[k] + d * scratch.nx[k], my = scratch.y[k] + d * scratch.ny[k],
-                    mz = scratch.z[k] + d * scratch.nz[k];
-        const float sx = m[0][0] * mx + m[1][0] * my + m[2][0] * mz + mt.x;
-        const float sy = m[0][1] * mx + m[1][1] * my + m[2][1] * mz + mt.y;
-        const float sz = m[0][2] * mx + m[1][2] * my + m[2][2] * mz + mt.z;
-        const float ex = sx - contacts.px[k], ey = sy - contacts.py[k], ez = sz - contacts.pz[k];
-        const float depth_scaled = d * scale;
-        const float depth_measured = std::sqrt(ex * ex + ey * ey + ez * ez);
-        const float depth_wo = scale > 0.0f ? depth_scaled : depth_measured;
-        const float ax = scratch.nx[k], ay = scratch.ny[k], az = scratch.nz[k];
-        const float nx = nm[0][0] * ax + nm[1][0] * ay + nm[2][0] * az;
-        const float ny = nm[0][1] * ax + nm[1][1] * ay + nm[2][1] * az;
-        const float nz = nm[0][2] * ax + nm[1][2] * ay + nm[2][2] * az;
-        const float n_length = std::sqrt(nx * nx + ny * ny + nz * nz);
-        const float n_normalise = 1.0f / (n_length > 0.0f ? n_length : 1.0f);
-        const float n_scale = scale > 0.0f ? scale : n_normalise;
-        const bool take = (scratch.valid[k] != 0) &
-                          ((contacts.hit[k] == 0) | (depth_wo > contacts.depth[k]));
-        const int32_t mask = -int32_t(take);
-        contacts.hit[k] |= int32_t(take);
-        contacts.depth[k] = select_bits(mask, depth_wo, contacts.depth[k]);
-        contacts.nx[k] = select_bits(mask, nx * n_scale, contacts.nx[k]);
-        contacts.ny[k] = select_bits(mask, ny * n_scale, contacts.ny[k]);
-        contacts.nz[k] = select_bits(mask, nz * n_scale, contacts.nz[k]);
-        contacts.sx[k] = select_bits(mask, sx, contacts.sx[k]);
-        contacts.sy[k] = select_bits(mask, sy, contacts.sy[k]);
-        contacts.sz[k] = select_bits(mask, sz, contacts.sz[k]);
+      /* Whether the transform is a similarity is resolved once per part, not per point. */
+      if (similarity_scale_ > 0.0f) {
+        take_contacts<true>(part, similarity_scale_, contacts, scratch);
+      }
+      else {
+        take_contacts<false>(part, similarity_scale_, contacts, scratch);
       }
     }
   }
@@ -260,8 +304,53 @@ class Collider {
     PartMap map;
     float cylinder_error = -1.0f, sphere_error = -1.0f;
     Affine world_to_map, map_to_world;
-    mat3 normal_to_world{1.0f};
+    mat3 normal_to_world{ 1.0f };
   };
+  /* T in world space for a part's map samples, and the deeper contacts taken. A similarity
+   * (rotation, translation, uniform scale) keeps distances and normals up to the scale; other
+   * affine maps need the lengths measured again. */
+  template<bool similarity, int64_t N> static HAIRDYN_BATCH_INLINE void take_contacts(
+      const Part &part, const float scale, ContactBatch<N> &contacts, const MapBatch<N> &scratch)
+  {
+    const int64_t size = contacts.size;
+    const mat3 m = part.map_to_world.linear;
+    const vec3 mt = part.map_to_world.translation;
+    const mat3 nm = part.normal_to_world;
+    for (int64_t k = 0; k < size; k++) {
+      const float d = scratch.depth[k];
+      const float mx = scratch.x[k] + d * scratch.nx[k], my = scratch.y[k] + d * scratch.ny[k],
+                  mz = scratch.z[k] + d * scratch.nz[k];
+      const float sx = m[0][0] * mx + m[1][0] * my + m[2][0] * mz + mt.x;
+      const float sy = m[0][1] * mx + m[1][1] * my + m[2][1] * mz + mt.y;
+      const float sz = m[0][2] * mx + m[1][2] * my + m[2][2] * mz + mt.z;
+      const float ax = scratch.nx[k], ay = scratch.ny[k], az = scratch.nz[k];
+      const float nx = nm[0][0] * ax + nm[1][0] * ay + nm[2][0] * az;
+      const float ny = nm[0][1] * ax + nm[1][1] * ay + nm[2][1] * az;
+      const float nz = nm[0][2] * ax + nm[1][2] * ay + nm[2][2] * az;
+      float depth_wo, n_scale;
+      if constexpr (similarity) {
+        depth_wo = d * scale;
+        n_scale = scale;
+      }
+      else {
+        const float ex = sx - contacts.px[k], ey = sy - contacts.py[k], ez = sz - contacts.pz[k];
+        depth_wo = std::sqrt(ex * ex + ey * ey + ez * ez);
+        const float n_length = std::sqrt(nx * nx + ny * ny + nz * nz);
+        n_scale = 1.0f / (n_length > 0.0f ? n_length : 1.0f);
+      }
+      const bool take =
+          (scratch.valid[k] != 0) & ((contacts.hit[k] == 0) | (depth_wo > contacts.depth[k]));
+      const int32_t mask = -int32_t(take);
+      contacts.hit[k] |= int32_t(take);
+      contacts.depth[k] = select_bits(mask, depth_wo, contacts.depth[k]);
+      contacts.nx[k] = select_bits(mask, nx * n_scale, contacts.nx[k]);
+      contacts.ny[k] = select_bits(mask, ny * n_scale, contacts.ny[k]);
+      contacts.nz[k] = select_bits(mask, nz * n_scale, contacts.nz[k]);
+      contacts.sx[k] = select_bits(mask, sx, contacts.sx[k]);
+      contacts.sy[k] = select_bits(mask, sy, contacts.sy[k]);
+      contacts.sz[k] = select_bits(mask, sz, contacts.sz[k]);
+    }
+  }
   void build_part(Part &part, bool choose_kind);
   MapFrame part_frame(const Part &part) const;
 
@@ -271,7 +360,7 @@ class Collider {
   std::vector<Part> parts_;
   MeshDistance exact_;
   float size_ = 0.0f;
-  mat4 object_to_world_{1.0f};
+  mat4 object_to_world_{ 1.0f };
   float similarity_scale_ = 1.0f; /* Uniform scale of object_to_world_, 0 if not a similarity. */
   double build_ms_ = 0.0;
   int64_t boundary_edges_num_ = 0;
@@ -300,9 +389,8 @@ class ColliderSet {
     return find_contact_of(*this, p_wo, r_contact);
   }
   /* The batched query over every collider (the deepest contact wins; ties keep the first). */
-  template<int64_t N>
-  HAIRDYN_BATCH_INLINE void accumulate_contacts(ContactBatch<N> &contacts,
-                                                MapBatch<N> &scratch) const
+  template<int64_t N> HAIRDYN_BATCH_INLINE void accumulate_contacts(ContactBatch<N> &contacts,
+                                                                    MapBatch<N> &scratch) const
   {
     for (const std::shared_ptr<Collider> &collider : colliders_) {
       collider->accumulate_contacts(contacts, scratch);

@@ -30,7 +30,7 @@ class CylinderMap {
   bool evaluate_map(const vec3 &p_cyl, MapSample &r_sample) const
   {
     MapBatch<1> b = single_point_batch(p_cyl);
-    sample(b, false);
+    sample<false>(b);
     return read_sample(b, 0, r_sample);
   }
 
@@ -39,7 +39,7 @@ class CylinderMap {
   bool find_contact_map(const vec3 &p_cyl, MapSample &r_sample) const
   {
     MapBatch<1> b = single_point_batch(p_cyl);
-    sample(b, true);
+    sample<true>(b);
     return read_sample(b, 0, r_sample);
   }
 
@@ -47,10 +47,10 @@ class CylinderMap {
   bool evaluate(const vec3 &p_object, MapSample &r_sample) const;
 
   /* The batched look-up (see MapBatch): with inside_only, valid only where P is inside. */
-  template<int64_t N>
-  HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b, const bool inside_only) const
+  template<bool inside_only, int64_t N> HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b) const
   {
     const float y_min = y_min_, y_max = y_max_, max_radius_sq = max_radius_sq_;
+    const RadialTable::Shape shape = table_.shape();
     const float u_per_radian = u_per_radian_, v_per_unit = v_per_unit_;
     for (int64_t k = 0; k < b.size; k++) {
       /* (r_p, θ_p, y_p) of P; outside the height range or beyond the largest radius P is
@@ -60,7 +60,8 @@ class CylinderMap {
       b.r_p[k] = std::sqrt(r_sq);
       b.defined[k] = (y >= y_min ? 1 : 0) & (y <= y_max ? 1 : 0) &
                      (inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1);
-      table_.locate(b, k, fast_atan2(z, x) * u_per_radian, (y - y_min) * v_per_unit - 0.5f);
+      RadialTable::locate(shape, b, k, fast_atan2(z, x) * u_per_radian,
+                          (y - y_min) * v_per_unit - 0.5f);
     }
     if constexpr (N == 1) {
       /* A single point (the per-point calls) stops here when it cannot be inside. */
@@ -78,13 +79,13 @@ class CylinderMap {
       const float rx = b.x[k] * inv_r, rz = b.z[k] * inv_r;
       const float radial_x = off_axis ? rx : 1.0f;
       const float radial_z = off_axis ? rz : 0.0f;
-      finish_lane(b, k, inside_only, radial_x * r_q, b.y[k], radial_z * r_q);
+      finish_lane<inside_only>(b, k, radial_x * r_q, b.y[k], radial_z * r_q);
     }
   }
 
  private:
   MapFrame frame_;
-  mat4 object_to_map_{1.0f};
+  mat4 object_to_map_{ 1.0f };
   RadialTable table_;
   float y_min_ = 0.0f, y_max_ = -1.0f;
   float u_per_radian_ = 0.0f;

@@ -6,6 +6,10 @@
 #include <cmath>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "collision/bvh.hh"
 #include "core/math.hh"
 #include "core/span.hh"
@@ -16,9 +20,9 @@ namespace hairdyn {
  * x along the reference direction (θ = 0), z = x × y. Rigid: distances are the same in object
  * and map space. */
 struct MapFrame {
-  vec3 origin{0.0f};
-  vec3 axis{0.0f, 1.0f, 0.0f};
-  vec3 reference{1.0f, 0.0f, 0.0f}; /* Made perpendicular to axis by make_frame. */
+  vec3 origin{ 0.0f };
+  vec3 axis{ 0.0f, 1.0f, 0.0f };
+  vec3 reference{ 1.0f, 0.0f, 0.0f }; /* Made perpendicular to axis by make_frame. */
 
   /* p_map = object_to_map * p_object. */
   mat4 object_to_map() const;
@@ -35,18 +39,18 @@ MapFrame fit_frame(Span<vec3> vertices, Span<ivec3> triangles);
 
 /* A contact or signed-depth sample in map space. */
 struct MapSample {
-  float depth = 0.0f;     /* (Q - P) · N: > 0 inside (Kurihara 1993, eq. 11). */
-  vec3 normal{0.0f};      /* N, unit, outward. */
-  vec3 surface_point{0.0f}; /* T = P + depth N (eq. 11). */
-  bool inside = false;    /* r_p < r_q (the comparison after eq. 10). */
+  float depth = 0.0f;         /* (Q - P) · N: > 0 inside (Kurihara 1993, eq. 11). */
+  vec3 normal{ 0.0f };        /* N, unit, outward. */
+  vec3 surface_point{ 0.0f }; /* T = P + depth N (eq. 11). */
+  bool inside = false;        /* r_p < r_q (the comparison after eq. 10). */
 };
 
 /* The batched look-up's stages are inlined into one function, whatever the caller: the
  * AVX2 clone of the parallel query (collider.cpp) then compiles all of them for AVX2. */
 #if defined(__GNUC__)
-#  define HAIRDYN_BATCH_INLINE inline __attribute__((always_inline))
+#define HAIRDYN_BATCH_INLINE inline __attribute__((always_inline))
 #else
-#  define HAIRDYN_BATCH_INLINE inline
+#define HAIRDYN_BATCH_INLINE inline
 #endif
 
 /* Points per batched look-up: the batch's arrays (about 20 floats per point) stay in L1. */
@@ -54,7 +58,9 @@ constexpr int64_t map_batch_size = 256;
 
 /* A batch of map look-ups as a structure of arrays, so that each stage of the look-up is one
  * branch-free loop the compiler vectorises: (1) table coordinates and cell indices, (2) the
- * gather of the four cells (the only scalar stage), (3) eq. 9–11. The per-point calls run the
+ * gather of the four cells (SSE by hand, four points at a time), (3) eq. 9–11. The loops
+ * vectorise only with -fno-trapping-math (set for collider.cpp in CMakeLists.txt): with
+ * trapping math GCC keeps the selects as branches. The per-point calls run the
  * same code with N = 1. Inputs x, y, z (map space); outputs valid, inside, depth, nx, ny, nz
  * (read only where valid). NaN or infinite inputs are never valid and never index out of the
  * table. */
@@ -89,9 +95,15 @@ HAIRDYN_BATCH_INLINE float fast_atan2(const float y, const float x)
   const float a = small / (big > 0.0f ? big : 1.0f);
   const float s = a * a;
   /* Minimax polynomial for atan on [0, 1]. */
-  float r = ((((((-0.0040540580f * s + 0.0218612288f) * s - 0.0559098861f) * s +
-               0.0964200441f) * s - 0.1390853351f) * s + 0.1994653599f) * s -
-             0.3332985605f) * s * a + a;
+  float r =
+      ((((((-0.0040540580f * s + 0.0218612288f) * s - 0.0559098861f) * s + 0.0964200441f) * s -
+         0.1390853351f) *
+            s +
+        0.1994653599f) *
+           s -
+       0.3332985605f) *
+          s * a +
+      a;
   r = ay > ax ? 1.57079637f - r : r;
   r = x < 0.0f ? 3.14159274f - r : r;
   return y < 0.0f ? -r : r;
@@ -100,7 +112,7 @@ HAIRDYN_BATCH_INLINE float fast_atan2(const float y, const float x)
 /* One table cell: the outward unit normal and the radius of the outermost hit; radius < 0
  * marks an empty cell (the ray missed the part). */
 struct MapCell {
-  vec3 normal{0.0f};
+  vec3 normal{ 0.0f };
   float radius = -1.0f;
 };
 static_assert(sizeof(MapCell) == 16, "one cell is 16 bytes: four cells per cache line");
@@ -109,18 +121,22 @@ static_assert(sizeof(MapCell) == 16, "one cell is 16 bytes: four cells per cache
 class RadialTable {
  public:
   RadialTable() = default;
-  RadialTable(int32_t u_num, int32_t v_num)
-      : u_num_(u_num),
-        v_num_(v_num),
-        u_last_(std::nextafter(float(u_num), 0.0f)),
-        cells_(size_t(u_num) * size_t(v_num))
+  RadialTable(int32_t u_num, int32_t v_num) :
+      u_num_(u_num), v_num_(v_num), u_last_(std::nextafter(float(u_num), 0.0f)),
+      cells_(size_t(u_num) * size_t(v_num))
   {
   }
 
   int32_t u_num() const { return u_num_; }
   int32_t v_num() const { return v_num_; }
-  MapCell &cell_for_write(const int32_t u, const int32_t v) { return cells_[size_t(v * u_num_ + u)]; }
-  const MapCell &cell(const int32_t u, const int32_t v) const { return cells_[size_t(v * u_num_ + u)]; }
+  MapCell &cell_for_write(const int32_t u, const int32_t v)
+  {
+    return cells_[size_t(v * u_num_ + u)];
+  }
+  const MapCell &cell(const int32_t u, const int32_t v) const
+  {
+    return cells_[size_t(v * u_num_ + u)];
+  }
   int64_t empty_cells_num() const;
   /* Largest radius of a filled cell (0 when all are empty). */
   float max_radius() const { return max_radius_; }
@@ -129,19 +145,29 @@ class RadialTable {
   /* Stage 1 of the bilinear look-up for point k (Kurihara 1993, eq. 8 and 10): the cell
    * i <= u < i + 1, j <= v < j + 1 and the fractions s, t. u wraps once around [0, m), v is
    * clamped to [0, n - 1]; anything else (NaN, infinities) lands in cell (0, 0). */
-  template<int64_t N>
-  HAIRDYN_BATCH_INLINE void locate(MapBatch<N> &b, const int64_t k, float u, const float v) const
+  /* The table's size as values: read once before a loop over the batch (a store into the
+   * batch's int32 arrays could otherwise be the table's own fields, for all the compiler
+   * knows, and the loop would neither keep them in registers nor vectorise). */
+  struct Shape {
+    int32_t u_num, v_num;
+    float u_last;
+  };
+  Shape shape() const { return { u_num_, v_num_, u_last_ }; }
+
+  template<int64_t N> static HAIRDYN_BATCH_INLINE void locate(const Shape shape, MapBatch<N> &b,
+                                                              const int64_t k, float u,
+                                                              const float v)
   {
-    const float m = float(u_num_);
+    const float m = float(shape.u_num);
     u = u < 0.0f ? u + m : u;
     u = u < m ? u : u - m;
-    u = clamp_or_low(u, 0.0f, u_last_);
-    const float v_clamped = clamp_or_low(v, 0.0f, float(v_num_ - 1));
+    u = clamp_or_low(u, 0.0f, shape.u_last);
+    const float v_clamped = clamp_or_low(v, 0.0f, float(shape.v_num - 1));
     const int32_t i0 = int32_t(u);
     const int32_t j0 = int32_t(v_clamped);
-    b.cell[k] = j0 * u_num_ + i0;
-    b.du[k] = i0 + 1 == u_num_ ? 1 - u_num_ : 1;
-    b.dv[k] = j0 + 1 < v_num_ ? u_num_ : 0;
+    b.cell[k] = j0 * shape.u_num + i0;
+    b.du[k] = i0 + 1 == shape.u_num ? 1 - shape.u_num : 1;
+    b.dv[k] = j0 + 1 < shape.v_num ? shape.u_num : 0;
     b.s[k] = u - float(i0);
     b.t[k] = v_clamped - float(j0);
   }
@@ -151,10 +177,50 @@ class RadialTable {
    * empty cell is not defined: a query never reports a collision next to a missed ray. */
   template<int64_t N> HAIRDYN_BATCH_INLINE void blend(MapBatch<N> &b) const
   {
-    /* The cells as floats (normal x, y, z, radius): indexed loads the compiler turns into
-     * gathers. */
+    /* The cells as floats (normal x, y, z, radius). */
     const float *cells = reinterpret_cast<const float *>(cells_.data());
-    for (int64_t k = 0; k < b.size; k++) {
+    int64_t k = 0;
+#if defined(__SSE2__)
+    /* Four points at a time: each cell is one 16-byte load (normal and radius together),
+     * blended as a vector with the same products and sums, in the same order, as the scalar
+     * lanes below; the four points' results are transposed into the batch's arrays. (The
+     * compiler makes no gathers of the scalar form's 16 indexed loads per point, and on
+     * CPUs that split 256-bit gathers they would be slower than these loads.) */
+    for (; N >= 4 && k + 4 <= b.size; k += 4) {
+      /* The weights as the scalar lanes compute them, four points at once. */
+      const __m128 one = _mm_set1_ps(1.0f);
+      const __m128 s = _mm_loadu_ps(b.s + k), t = _mm_loadu_ps(b.t + k);
+      const __m128 s_1 = _mm_sub_ps(one, s), t_1 = _mm_sub_ps(one, t);
+      const __m128 w00 = _mm_mul_ps(s_1, t_1), w10 = _mm_mul_ps(s, t_1);
+      const __m128 w01 = _mm_mul_ps(s_1, t), w11 = _mm_mul_ps(s, t);
+      __m128 sum[4], low[4], first[4];
+      blend_cells<0>(cells, b, k, w00, w10, w01, w11, sum[0], low[0], first[0]);
+      blend_cells<1>(cells, b, k, w00, w10, w01, w11, sum[1], low[1], first[1]);
+      blend_cells<2>(cells, b, k, w00, w10, w01, w11, sum[2], low[2], first[2]);
+      blend_cells<3>(cells, b, k, w00, w10, w01, w11, sum[3], low[3], first[3]);
+      _MM_TRANSPOSE4_PS(sum[0], sum[1], sum[2], sum[3]);         /* nx, ny, nz, r_q */
+      _MM_TRANSPOSE4_PS(first[0], first[1], first[2], first[3]); /* c00's normal (and radius) */
+      /* The radii's minimum is lane 3 of each point's componentwise minimum. */
+      const __m128 low01 = _mm_unpackhi_ps(low[0], low[1]),
+                   low23 = _mm_unpackhi_ps(low[2], low[3]);
+      const __m128 min_radius = _mm_movehl_ps(low23, low01);
+      const __m128i filled =
+          _mm_srli_epi32(_mm_castps_si128(_mm_cmpge_ps(min_radius, _mm_setzero_ps())), 31);
+      __m128i *defined = reinterpret_cast<__m128i *>(b.defined + k);
+      _mm_storeu_si128(defined, _mm_and_si128(_mm_loadu_si128(defined), filled));
+      _mm_storeu_ps(b.r_q + k, sum[3]);
+      /* Opposite normals cancelling out: keep the first cell's (as below). */
+      const __m128 length_sq =
+          _mm_add_ps(_mm_add_ps(_mm_mul_ps(sum[0], sum[0]), _mm_mul_ps(sum[1], sum[1])),
+                     _mm_mul_ps(sum[2], sum[2]));
+      const __m128 keep = _mm_cmpgt_ps(length_sq, _mm_set1_ps(1e-12f));
+      for (int c = 0; c < 3; c++) {
+        const __m128 n = _mm_or_ps(_mm_and_ps(keep, sum[c]), _mm_andnot_ps(keep, first[c]));
+        _mm_storeu_ps((c == 0 ? b.nx : c == 1 ? b.ny : b.nz) + k, n);
+      }
+    }
+#endif
+    for (; k < b.size; k++) {
       const int32_t c00 = 4 * b.cell[k], c10 = 4 * (b.cell[k] + b.du[k]);
       const int32_t c01 = 4 * (b.cell[k] + b.dv[k]), c11 = 4 * (b.cell[k] + b.du[k] + b.dv[k]);
       const float s = b.s[k], t = b.t[k];
@@ -180,6 +246,29 @@ class RadialTable {
   }
 
  private:
+#if defined(__SSE2__)
+  /* Point k + q's four cells blended as (nx, ny, nz, r): c00 w00 + c10 w10 + c01 w01 +
+   * c11 w11 with lane q of the weights, their componentwise minimum, and c00 itself. */
+  template<int q, int64_t N> static HAIRDYN_BATCH_INLINE void blend_cells(
+      const float *cells, const MapBatch<N> &b, const int64_t k, const __m128 w00,
+      const __m128 w10, const __m128 w01, const __m128 w11, __m128 &r_sum, __m128 &r_min,
+      __m128 &r_first)
+  {
+    const float *p00 = cells + 4 * b.cell[k + q];
+    const float *p10 = p00 + 4 * b.du[k + q];
+    const float *p01 = p00 + 4 * b.dv[k + q];
+    const float *p11 = p10 + 4 * b.dv[k + q];
+    const __m128 c00 = _mm_loadu_ps(p00), c10 = _mm_loadu_ps(p10);
+    const __m128 c01 = _mm_loadu_ps(p01), c11 = _mm_loadu_ps(p11);
+    constexpr int lane = _MM_SHUFFLE(q, q, q, q);
+    r_sum = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(c00, _mm_shuffle_ps(w00, w00, lane)),
+                                             _mm_mul_ps(c10, _mm_shuffle_ps(w10, w10, lane))),
+                                  _mm_mul_ps(c01, _mm_shuffle_ps(w01, w01, lane))),
+                       _mm_mul_ps(c11, _mm_shuffle_ps(w11, w11, lane)));
+    r_min = _mm_min_ps(_mm_min_ps(c00, c10), _mm_min_ps(c01, c11));
+    r_first = c00;
+  }
+#endif
   int32_t u_num_ = 0;
   int32_t v_num_ = 0;
   float u_last_ = 0.0f; /* The largest float below m. */
@@ -189,9 +278,8 @@ class RadialTable {
 
 /* Stage 3's end, shared by both maps (Kurihara 1993, eq. 11): N normalised, Q given, the
  * depth (Q - P) · N along N; valid where defined and, with inside_only, r_p < r_q. */
-template<int64_t N>
-HAIRDYN_BATCH_INLINE void finish_lane(MapBatch<N> &b, const int64_t k, const bool inside_only, const float qx,
-                        const float qy, const float qz)
+template<bool inside_only, int64_t N> HAIRDYN_BATCH_INLINE void finish_lane(
+    MapBatch<N> &b, const int64_t k, const float qx, const float qy, const float qz)
 {
   const float nx = b.nx[k], ny = b.ny[k], nz = b.nz[k];
   const float inv = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
@@ -206,8 +294,8 @@ HAIRDYN_BATCH_INLINE void finish_lane(MapBatch<N> &b, const int64_t k, const boo
 }
 
 /* Point k of a batch as a MapSample (T = P + depth N); false where it is not valid. */
-template<int64_t N>
-inline bool read_sample(const MapBatch<N> &b, const int64_t k, MapSample &r_sample)
+template<int64_t N> inline bool read_sample(const MapBatch<N> &b, const int64_t k,
+                                            MapSample &r_sample)
 {
   if (!b.valid[k]) {
     return false;

@@ -27,7 +27,7 @@ class SphereMap {
   bool evaluate_map(const vec3 &p_sph, MapSample &r_sample) const
   {
     MapBatch<1> b = single_point_batch(p_sph);
-    sample(b, false);
+    sample<false>(b);
     return read_sample(b, 0, r_sample);
   }
 
@@ -35,17 +35,17 @@ class SphereMap {
   bool find_contact_map(const vec3 &p_sph, MapSample &r_sample) const
   {
     MapBatch<1> b = single_point_batch(p_sph);
-    sample(b, true);
+    sample<true>(b);
     return read_sample(b, 0, r_sample);
   }
 
   bool evaluate(const vec3 &p_object, MapSample &r_sample) const;
 
   /* The batched look-up (see MapBatch): with inside_only, valid only where P is inside. */
-  template<int64_t N>
-  HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b, const bool inside_only) const
+  template<bool inside_only, int64_t N> HAIRDYN_BATCH_INLINE void sample(MapBatch<N> &b) const
   {
     const float max_radius_sq = max_radius_sq_;
+    const RadialTable::Shape shape = table_.shape();
     const float u_per_radian = u_per_radian_, v_per_radian = v_per_radian_;
     const float v_last = float(table_.v_num() - 1);
     for (int64_t k = 0; k < b.size; k++) {
@@ -57,7 +57,7 @@ class SphereMap {
       /* θ around the pole axis, φ from it. */
       const float v = fast_atan2(std::sqrt(rho_xz_sq), y) * v_per_radian - 0.5f;
       b.v[k] = v;
-      table_.locate(b, k, fast_atan2(z, x) * u_per_radian, v);
+      RadialTable::locate(shape, b, k, fast_atan2(z, x) * u_per_radian, v);
     }
     if constexpr (N == 1) {
       /* A single point (the per-point calls) stops here when it cannot be inside. */
@@ -100,13 +100,13 @@ class SphereMap {
       const float dx = off_centre ? ux : 0.0f;
       const float dy = off_centre ? uy : 1.0f;
       const float dz = off_centre ? uz : 0.0f;
-      finish_lane(b, k, inside_only, dx * b.r_q[k], dy * b.r_q[k], dz * b.r_q[k]);
+      finish_lane<inside_only>(b, k, dx * b.r_q[k], dy * b.r_q[k], dz * b.r_q[k]);
     }
   }
 
  private:
   MapFrame frame_;
-  mat4 object_to_map_{1.0f};
+  mat4 object_to_map_{ 1.0f };
   RadialTable table_;
   MapCell north_, south_; /* The rays along +y and -y. */
   float u_per_radian_ = 0.0f;
