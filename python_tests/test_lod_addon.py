@@ -11,6 +11,7 @@ from mathutils import Vector
 from hairdyn import bake, cli, native, simulation, ui
 from hairdyn.errors import HairdynError
 from layout_recorder import Layout
+from render_check import cycles_pixels
 
 SECTION = "Level of Detail (Ward & Lin 2003)"
 
@@ -184,17 +185,8 @@ def test_colour_by_level_shades_the_output_and_gives_the_groom_back(open_fixture
         if other not in (output, camera):
             other.hide_render = True
     scene.world = scene.world or bpy.data.worlds.new("World")
-    scene.render.engine = 'CYCLES'
-    scene.cycles.samples = 4
-    scene.cycles.use_denoising = False
-    scene.render.resolution_x, scene.render.resolution_y = 120, 120
     path = artifacts / f"lod_levels_{bpy.app.version_string.split()[0]}.png"
-    scene.render.filepath = str(path)
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(str(path))
-    pixels = np.empty(len(image.pixels), dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    rgb = pixels.reshape(-1, 4)[:, :3]
+    rgb = cycles_pixels(scene, path, 120)[:, :3]
     red = (rgb[:, 0] > 2.0 * rgb[:, 2] + 0.02).sum()
     blue = (rgb[:, 2] > 2.0 * rgb[:, 0] + 0.02).sum()
     assert red > 20 and blue > 20, (red, blue)

@@ -8,6 +8,7 @@ import numpy as np
 from mathutils import Vector
 
 from hairdyn import bake, simulation
+from render_check import cycles_pixels
 from test_sintel import sintel_scene
 
 
@@ -56,10 +57,6 @@ def test_sintel_shell_normals_against_the_default_hair_shader(artifacts):
     light.rotation_euler = (np.radians(50), 0.0, np.radians(40))
     scene.collection.objects.link(light)
     hair.hide_render = True
-    scene.render.engine = 'CYCLES'
-    scene.cycles.samples = 4
-    scene.cycles.use_denoising = False
-    scene.render.resolution_x, scene.render.resolution_y = 160, 160
     default = bpy.data.materials.new("default_hair")
     default.use_nodes = True
     images = {}
@@ -70,11 +67,6 @@ def test_sintel_shell_normals_against_the_default_hair_shader(artifacts):
         output.data.materials.clear()
         output.data.materials.append(material)
         path = artifacts / f"sintel_{name}_{bpy.app.version_string.split()[0]}.png"
-        scene.render.filepath = str(path)
-        bpy.ops.render.render(write_still=True)
-        image = bpy.data.images.load(str(path))
-        pixels = np.empty(len(image.pixels), dtype=np.float32)
-        image.pixels.foreach_get(pixels)
-        images[name] = pixels
+        images[name] = cycles_pixels(scene, path, 160)
         assert path.is_file()
     assert np.abs(images["shell_normals"] - images["default_hair"]).mean() > 0.002
