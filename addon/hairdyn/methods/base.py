@@ -10,6 +10,21 @@ import numpy as np
 from .. import parameters
 
 
+def node_material(name, build):
+    """The material `name`; made the first time with nodes, its tree emptied and filled by
+    build(nodes, links)."""
+    import bpy  # the rest of this module runs without Blender
+
+    material = bpy.data.materials.get(name)
+    if material is None:
+        material = bpy.data.materials.new(name)
+        material.use_nodes = True
+        tree = material.node_tree
+        tree.nodes.clear()
+        build(tree.nodes, tree.links)
+    return material
+
+
 def object_poll(kind):
     """A PointerProperty poll that offers only objects of this type ('MESH', 'CURVES', ...)."""
 

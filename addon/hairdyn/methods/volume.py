@@ -9,7 +9,7 @@ import numpy as np
 from bpy.props import BoolProperty, PointerProperty
 
 from ..errors import HairdynError
-from .base import Section, object_poll
+from .base import Section, node_material, object_poll
 from .strands import Attached, Extension
 
 SHELL_MATERIAL = "hairdyn_shell_normals"
@@ -102,13 +102,10 @@ def ensure_shell_material():
     """Hair shaded with the shell normals (Petrovic 2006 §4.1, Fig. 3(b)): a diffuse lobe about
     N = shell_normal, as if the hair volume were a surface, plus the strands' own highlight
     (the Principled Hair BSDF's reflection). Assign it to the output curves."""
-    material = bpy.data.materials.get(SHELL_MATERIAL)
-    if material is not None:
-        return material
-    material = bpy.data.materials.new(SHELL_MATERIAL)
-    material.use_nodes = True
-    nodes, links = material.node_tree.nodes, material.node_tree.links
-    nodes.clear()
+    return node_material(SHELL_MATERIAL, _shell_nodes)
+
+
+def _shell_nodes(nodes, links):
     normal = nodes.new("ShaderNodeAttribute")
     normal.attribute_name = "shell_normal"
     diffuse = nodes.new("ShaderNodeBsdfDiffuse")
@@ -122,7 +119,6 @@ def ensure_shell_material():
     links.new(highlight.outputs[0], mix.inputs[1])
     output = nodes.new("ShaderNodeOutputMaterial")
     links.new(mix.outputs[0], output.inputs["Surface"])
-    return material
 
 
 EXTENSION = Extension(
