@@ -195,3 +195,11 @@ def test_colour_by_level_shades_the_output_and_gives_the_groom_back(open_fixture
     assert output.material_slots[0].link == 'DATA'
     settings.lod_options.color_by_level = True
     assert output.material_slots[0].material.name == "hairdyn_lod_level"
+
+
+def test_colour_by_level_shows_from_the_first_frame_written(open_fixture):
+    hair = lod_hair(open_fixture)
+    hair.hairdyn.lod_options.color_by_level = True
+    simulation.run(bpy.context, hair, 1, 1)  # a one-frame run: the output is made by it
+    slot = hair.hairdyn.output_curves.material_slots[0]
+    assert slot.link == 'OBJECT' and slot.material.name == "hairdyn_lod_level"

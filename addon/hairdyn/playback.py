@@ -148,7 +148,7 @@ def live_step(obj, scene, depsgraph):
         live = known[0]
         live.step(depsgraph, simulation.frame_dt(scene))
         known[1] = frame
-    outputs.write(obj, live.frame())
+    live.write_outputs(live.frame())
     return True
 
 

@@ -167,6 +167,12 @@ class Simulation:
         )
         return {STRANDS: strands, **self.method.streams()}
 
+    def write_outputs(self, frame_data):
+        """Shows `frame_data` (a frame()) in the hair object's output objects; the method may
+        then dress them (Method.outputs_written)."""
+        outputs.write(self.hair_obj, frame_data)
+        self.method.outputs_written(self.hair_obj)
+
     def frame(self):
         """{stream name: (arrays, curve offsets or None, output)} of the current frame, what
         the cache stores and outputs.write shows. Never NaN: a broken frame raises instead."""
@@ -327,7 +333,7 @@ class Runner:
                 frame_data[STRANDS][0],
                 {name: arrays for name, (arrays, _, _) in frame_data.items() if name != STRANDS},
             )
-        outputs.write(self.hair_obj, frame_data)
+        self.simulation.write_outputs(frame_data)
         return frame, ms
 
     def report(self):

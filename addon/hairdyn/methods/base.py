@@ -163,6 +163,10 @@ class Method:
         """Its own figures for the run's report."""
         return {}
 
+    def outputs_written(self, hair_obj):
+        """After a frame of it was written into the hair object's output objects (they exist
+        from then on)."""
+
     def contacts_num(self):
         """Points its collision response touched in the last step (0 for a method that does
         not count them); the frame record's `contacts`."""

@@ -20,7 +20,7 @@ import numpy as np
 from bpy.props import BoolProperty, PointerProperty
 
 from ..errors import HairdynError
-from .base import Section, object_poll
+from .base import Section, node_material, object_poll
 from .strands import Attached, Extension, NoPasses
 
 NAME = "Level of detail (Ward & Lin 2003)"
@@ -32,38 +32,36 @@ def ensure_level_material(finest_level=None):
     strips through green to blue on the finest level (`finest_level`, when given, sets the
     scale; it is kept from the last run otherwise), lit diffusely with a little glow so that
     the colours read in any light. Shown in Material Preview and Rendered shading."""
-    material = bpy.data.materials.get(LEVEL_MATERIAL)
-    if material is None:
-        material = bpy.data.materials.new(LEVEL_MATERIAL)
-        material.use_nodes = True
-        nodes, links = material.node_tree.nodes, material.node_tree.links
-        nodes.clear()
-        level = nodes.new("ShaderNodeAttribute")
-        level.attribute_name = "lod_level"
-        scale = nodes.new("ShaderNodeMath")
-        scale.name = "finest_level"
-        scale.operation = 'DIVIDE'
-        scale.inputs[1].default_value = 1.0
-        links.new(level.outputs["Fac"], scale.inputs[0])
-        ramp = nodes.new("ShaderNodeValToRGB")
-        stops = ramp.color_ramp.elements
-        stops[0].color = (1.0, 0.08, 0.03, 1.0)
-        stops[1].color = (0.05, 0.25, 1.0, 1.0)
-        stops.new(0.5).color = (0.2, 0.9, 0.1, 1.0)
-        links.new(scale.outputs[0], ramp.inputs["Fac"])
-        diffuse = nodes.new("ShaderNodeBsdfDiffuse")
-        glow = nodes.new("ShaderNodeEmission")
-        glow.inputs["Strength"].default_value = 0.3
-        for shader in (diffuse, glow):
-            links.new(ramp.outputs["Color"], shader.inputs["Color"])
-        add = nodes.new("ShaderNodeAddShader")
-        links.new(diffuse.outputs[0], add.inputs[0])
-        links.new(glow.outputs[0], add.inputs[1])
-        output = nodes.new("ShaderNodeOutputMaterial")
-        links.new(add.outputs[0], output.inputs["Surface"])
+    material = node_material(LEVEL_MATERIAL, _level_nodes)
     if finest_level is not None:
         material.node_tree.nodes["finest_level"].inputs[1].default_value = max(1, finest_level)
     return material
+
+
+def _level_nodes(nodes, links):
+    level = nodes.new("ShaderNodeAttribute")
+    level.attribute_name = "lod_level"
+    scale = nodes.new("ShaderNodeMath")
+    scale.name = "finest_level"
+    scale.operation = 'DIVIDE'
+    scale.inputs[1].default_value = 1.0
+    links.new(level.outputs["Fac"], scale.inputs[0])
+    ramp = nodes.new("ShaderNodeValToRGB")
+    stops = ramp.color_ramp.elements
+    stops[0].color = (1.0, 0.08, 0.03, 1.0)
+    stops[1].color = (0.05, 0.25, 1.0, 1.0)
+    stops.new(0.5).color = (0.2, 0.9, 0.1, 1.0)
+    links.new(scale.outputs[0], ramp.inputs["Fac"])
+    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+    glow = nodes.new("ShaderNodeEmission")
+    glow.inputs["Strength"].default_value = 0.3
+    for shader in (diffuse, glow):
+        links.new(ramp.outputs["Color"], shader.inputs["Color"])
+    add = nodes.new("ShaderNodeAddShader")
+    links.new(diffuse.outputs[0], add.inputs[0])
+    links.new(glow.outputs[0], add.inputs[1])
+    output = nodes.new("ShaderNodeOutputMaterial")
+    links.new(add.outputs[0], output.inputs["Surface"])
 
 
 def show_levels(hair_obj):
@@ -196,7 +194,6 @@ class LodStrands(Attached):
         self.rest_rotation = rotation(build.head_matrix)
         self.root_frames = self.rest_frames
         self.levels, self.switches, self.errors, self.ms, self.fine_ms = [], 0, [], [], []
-        self.hair_obj = build.hair_obj
         if self.options.color_by_level:
             ensure_level_material(self.solver.finest_level)
 
@@ -257,8 +254,8 @@ class LodStrands(Attached):
 
     # The extension's attached figures.
 
-    def after_step(self, _solver, _head_matrix):
-        show_levels(self.hair_obj)  # the output curves exist from the first frame written
+    def outputs_written(self, hair_obj):
+        show_levels(hair_obj)
 
     def strand_attributes(self):
         return {"lod_level": np.asarray(self.solver.lod_level, dtype=np.float32)}

@@ -50,8 +50,8 @@ class NoPasses(Exception):
 
 class Attached:
     """An extension at work on one solver: after_step() once per frame, strand_columns and
-    strand_attributes() (per strand point arrays for the output Curves and the cache), and
-    its report fields."""
+    strand_attributes() (per strand point arrays for the output Curves and the cache),
+    outputs_written() once a frame is shown in the output objects, and its report fields."""
 
     strand_columns = {}
 
@@ -60,6 +60,9 @@ class Attached:
 
     def strand_attributes(self):
         return {}
+
+    def outputs_written(self, hair_obj):
+        pass
 
     def report(self):
         return {}
@@ -210,6 +213,10 @@ class Strands(Method):
 
     def strand_attributes(self):
         return {k: v for item in self.attached for k, v in item.strand_attributes().items()}
+
+    def outputs_written(self, hair_obj):
+        for item in self.attached:
+            item.outputs_written(hair_obj)
 
     def report(self):
         return {k: v for item in self.attached for k, v in item.report().items()}
