@@ -5,6 +5,7 @@ report fields, and what the panel shows for it (`Section`). Nothing here knows a
 name; `methods/__init__.py` is the registry.
 """
 
+import bpy
 import numpy as np
 
 from .. import parameters
@@ -13,8 +14,6 @@ from .. import parameters
 def node_material(name, build):
     """The material `name`; made the first time with nodes, its tree emptied and filled by
     build(nodes, links)."""
-    import bpy  # the rest of this module runs without Blender
-
     material = bpy.data.materials.get(name)
     if material is None:
         material = bpy.data.materials.new(name)
