@@ -43,4 +43,24 @@ inline glm::vec2 chart_angles(const mat3 &chart, const vec3 &direction)
   return glm::vec2(std::asin(glm::clamp(local.x, -1.0f, 1.0f)), std::atan2(local.y, local.z));
 }
 
+/* The deflection that points a segment along `direction` (any length but zero) in `chart`,
+ * and its angles in r_angles. The sines and cosines are the direction's own components in
+ * the chart, d = (sin θ, cos θ sin φ, cos θ cos φ), so no sine or cosine is evaluated; θ and
+ * φ take one atan2_fast each (θ ∈ [−π/2, π/2], as asin gives it). */
+inline Deflection chart_deflection(const mat3 &chart, const vec3 &direction, glm::vec2 &r_angles)
+{
+  const vec3 local = glm::transpose(chart) * direction;
+  const float across = std::sqrt(local.y * local.y + local.z * local.z); /* |cos θ| · |d| */
+  const float inv_length = 1.0f / std::sqrt(local.x * local.x + across * across);
+  r_angles = glm::vec2(atan2_fast(local.x, across), atan2_fast(local.y, local.z));
+  if (!(across > 0.0f)) {
+    /* At the chart's pole φ is undefined: atan2 of the zeros chose it. */
+    return Deflection(vec4(local.x * inv_length, 0.0f, std::sin(r_angles.y),
+                           std::cos(r_angles.y)));
+  }
+  const float inv_across = 1.0f / across;
+  return Deflection(vec4(local.x * inv_length, across * inv_length, local.y * inv_across,
+                         local.z * inv_across));
+}
+
 }  // namespace hairdyn

@@ -458,11 +458,9 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
     moved = moved || positions_wo_[i] != positions_before_[i];
     if (moved) {
       const vec3 along = positions_wo_[i] - node;
-      const float length = glm::length(along);
-      if (length > 1e-6f * d) {
-        angles_[i] = chart_angles(chart, along / length);
-      }
-      trig_[i] = Deflection(angles_[i]).trig();
+      trig_[i] = glm::dot(along, along) > 1e-12f * d * d ?
+                     chart_deflection(chart, along, angles_[i]).trig() :
+                     Deflection(angles_[i]).trig();
     }
     const Deflection deflection(trig_[i]);
     frame = deflection.rotate(chart);
