@@ -6,7 +6,7 @@ from pathlib import Path
 import bpy
 import pytest
 
-from hairdyn import presets
+from hairdyn import presets, simulation
 
 
 def test_paper_presets_apply(open_fixture):
@@ -28,6 +28,18 @@ def test_paper_presets_apply(open_fixture):
                                   menu_idname="HAIRDYN_MT_presets")
     assert hair.hairdyn.method == 'LCP'
     assert (hair.hairdyn.lcp.a0, hair.hairdyn.lcp.neighbor_num) == (0.5, 12)
+    hair.hairdyn.volume.smoothing = 0.9
+    bpy.ops.script.execute_preset(filepath=str(folder / "petrovic_2006.py"),
+                                  menu_idname="HAIRDYN_MT_presets")
+    assert hair.hairdyn.method == 'STRANDS'
+    options = hair.hairdyn.volume_options
+    assert options.use_smoothing and options.use_shell_normals and options.target is None
+    assert hair.hairdyn.volume.smoothing == pytest.approx(0.2)
+    # It runs on the shipped example as it stands: smoothing each substep, shell normals out.
+    hair.hairdyn.strands.children_per_guide = 0
+    report = simulation.run(bpy.context, hair, 1, 3)
+    assert report["volume_ms"] > 0.0 and report["density_max"] > 0.0
+    assert "shell_normal" in hair.hairdyn.output_curves.data.attributes
 
 
 def test_user_preset_round_trip(open_fixture):
