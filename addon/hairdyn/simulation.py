@@ -333,6 +333,7 @@ class Runner:
                 frame_data[STRANDS][0],
                 {name: arrays for name, (arrays, _, _) in frame_data.items() if name != STRANDS},
             )
+            self.simulation.method.frame_baked(self.hair_obj, self.cache, frame)
         self.simulation.write_outputs(frame_data)
         return frame, ms
 

@@ -166,6 +166,10 @@ class Method:
         """After a frame of it was written into the hair object's output objects (they exist
         from then on)."""
 
+    def frame_baked(self, hair_obj, cache, frame):
+        """After `frame` was written into the bake's `cache` (files beside it go in
+        cache.directory)."""
+
     def contacts_num(self):
         """Points its collision response touched in the last step (0 for a method that does
         not count them); the frame record's `contacts`."""

@@ -51,7 +51,8 @@ class NoPasses(Exception):
 class Attached:
     """An extension at work on one solver: after_step() once per frame, strand_columns and
     strand_attributes() (per strand point arrays for the output Curves and the cache),
-    outputs_written() once a frame is shown in the output objects, and its report fields."""
+    outputs_written() once a frame is shown in the output objects, frame_baked() once it is in
+    a bake's cache, and its report fields."""
 
     strand_columns = {}
 
@@ -62,6 +63,9 @@ class Attached:
         return {}
 
     def outputs_written(self, hair_obj):
+        pass
+
+    def frame_baked(self, hair_obj, cache, frame):
         pass
 
     def report(self):
@@ -217,6 +221,10 @@ class Strands(Method):
     def outputs_written(self, hair_obj):
         for item in self.attached:
             item.outputs_written(hair_obj)
+
+    def frame_baked(self, hair_obj, cache, frame):
+        for item in self.attached:
+            item.frame_baked(hair_obj, cache, frame)
 
     def report(self):
         return {k: v for item in self.attached for k, v in item.report().items()}

@@ -37,11 +37,20 @@ class HairdynVolumeOptions(bpy.types.PropertyGroup):
         description="Write the hair-shell normals N = ∇S (Petrovic 2006 §4.1, eq. 2) as the "
         "point attribute shell_normal of the output curves, for the shell-normal material",
     )
+    use_grid_preview: BoolProperty(
+        name="Grid Preview",
+        default=False,
+        description="Bake the hair density D (Petrovic 2006 eq. 1, nodes per grid vertex) of "
+        "every frame as an OpenVDB file beside the bake (density/), shown by the Volume object "
+        "'<hair> density' in the viewport and in renders. Needs an OpenVDB writer for this "
+        "Python (Debian's python3-openvdb serves Python 3.11)",
+    )
 
 
 class VolumeAttached(Attached):
-    def __init__(self, volume_pass, shell, groom):
+    def __init__(self, volume_pass, shell, groom, preview=None):
         self.volume_pass, self.shell, self.groom = volume_pass, shell, groom
+        self.preview = preview  # GridPreview, or None
         self.ms, self.density_max, self.normals = [], 0.0, None
         if shell is not None:
             self.strand_columns = {"shell_normal": 3}
@@ -53,6 +62,12 @@ class VolumeAttached(Attached):
             self.density_max = max(self.density_max, self.volume_pass.density_max)
         if self.shell is not None:
             self.normals = self.shell.transport(solver.positions, head_matrix)
+        if self.preview is not None:
+            self.preview.step(solver.positions, head_matrix)
+
+    def frame_baked(self, hair_obj, cache, frame):
+        if self.preview is not None:
+            self.preview.write(hair_obj, cache, frame)
 
     def strand_attributes(self):
         return {} if self.normals is None else {"shell_normal": self.normals}
@@ -69,9 +84,82 @@ class VolumeAttached(Attached):
         return figures
 
 
+class GridPreview:
+    """The density grid of eq. 1 (on the pass's cell, moving with the head) of each baked frame
+    as <bake>/density/density_<frame>.vdb, and a Volume object that plays them as a sequence.
+    """
+
+    FOLDER = "density"
+
+    def __init__(self, native, curve_offsets, cell_size):
+        self.writer_check()
+        self.native, self.curve_offsets, self.cell_size = native, curve_offsets, cell_size
+        self.density = self.grid_to_world = None
+        self.first_frame = None
+
+    @staticmethod
+    def writer_check():
+        from .. import volume_vdb
+
+        writer, reason = volume_vdb.find_writer()
+        if writer is None:
+            raise HairdynError(f"Grid Preview: {reason}")
+
+    def step(self, positions, head_matrix):
+        self.density, self.grid_to_world = self.native.density_grid(
+            self.curve_offsets, positions, head_matrix, self.cell_size
+        )
+
+    @classmethod
+    def path(cls, directory, frame):
+        return directory / cls.FOLDER / f"density_{int(frame):06d}.vdb"
+
+    def write(self, hair_obj, cache, frame):
+        from .. import volume_vdb
+
+        path = self.path(cache.directory, frame)
+        path.parent.mkdir(exist_ok=True)
+        first = int(cache.manifest["frame_start"])
+        if self.first_frame is None:
+            # This run's first frame: files of an older bake go, those a resumed bake keeps
+            # (its frames before this one) stay.
+            self.first_frame = first
+            for old in path.parent.glob("density_*.vdb"):
+                number = old.stem.rsplit("_", 1)[-1]
+                if not number.isdigit() or not first <= int(number) < frame:
+                    old.unlink(missing_ok=True)
+        volume_vdb.write_density_vdb(str(path), self.density, self.grid_to_world)
+        show_grid_sequence(hair_obj, self.path(cache.directory, first), first, frame)
+
+
+def show_grid_sequence(hair_obj, first_path, first, last):
+    """The Volume object '<hair> density' playing the files of frames first..last (first_path
+    is frame first's), each at its own scene frame."""
+    name = f"{hair_obj.name} density"
+    volume = bpy.data.volumes.get(name) or bpy.data.volumes.new(name)
+    obj = bpy.data.objects.get(name)
+    if obj is None or obj.type != 'VOLUME':
+        obj = bpy.data.objects.new(name, volume)
+        collections = hair_obj.users_collection
+        (collections[0] if collections else bpy.context.scene.collection).objects.link(obj)
+    obj.data = volume
+    volume.filepath = bpy.path.relpath(str(first_path)) if bpy.data.filepath else str(first_path)
+    volume.is_sequence = True
+    volume.frame_start = first
+    volume.frame_offset = first - 1
+    volume.frame_duration = last - first + 1
+    volume.sequence_mode = 'CLIP'
+    volume.grids.load()
+
+
 def attach(solver, build):
     options = build.settings.volume_options
-    if not (options.use_smoothing or options.target or options.use_shell_normals):
+    if not (
+        options.use_smoothing
+        or options.target
+        or options.use_shell_normals
+        or options.use_grid_preview
+    ):
         return None
     from .. import bridge
 
@@ -95,7 +183,10 @@ def attach(solver, build):
         except ValueError as error:
             raise HairdynError(f"Shell normals: {error} (lower Shell Threshold)") from None
         ensure_shell_material()
-    return VolumeAttached(volume_pass, shell, groom)
+    preview = None
+    if options.use_grid_preview:
+        preview = GridPreview(build.native, groom.curve_offsets, params.cell_size)
+    return VolumeAttached(volume_pass, shell, groom, preview)
 
 
 def ensure_shell_material():
@@ -133,7 +224,7 @@ EXTENSION = Extension(
             rest=True,
             draw=lambda layout, settings: [
                 layout.prop(settings.volume_options, name)
-                for name in ("use_smoothing", "target", "use_shell_normals")
+                for name in ("use_smoothing", "target", "use_shell_normals", "use_grid_preview")
             ],
         ),
     ),

@@ -5,6 +5,7 @@
 # shell_normal for the shell-normal material. Directing toward a target (§5.2) needs a target
 # shape: pick it in the Volume section.
 import bpy
+
 settings = bpy.context.object.hairdyn
 
 settings.method = 'STRANDS'
