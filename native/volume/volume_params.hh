@@ -16,8 +16,10 @@ struct VolumeParams {
   float smoothing = 0.2f;
   /* Cells, radius of the binomial filter that smooths the grid velocities (§5.1). */
   int32_t filter_radius = 1;
-  /* m/s², κ (§5.2): acceleration per unit of the density force F that follows eq. 3 (F in
-   * grid units); 0 turns targeting off even when a target is set. */
+  /* m/s², κ (§5.2): acceleration per unit of the relative density force F / D̄_t (F the
+   * force that follows eq. 3 in grid units, D̄_t the target's mean density where it has
+   * hair), so a sparse and a dense groom, and every level, feel the same; 0 turns targeting
+   * off even when a target is set. */
   float target_strength = 20.0f;
   /* Coarse-to-fine levels of the targeting grid (§5.2, last paragraph): level l has cells
    * 2^l · h; targeting starts on the coarsest and refines as the error drops. */
@@ -50,8 +52,8 @@ struct VolumeParams {
                  "Radius of the filter that smooths the grid velocities (Petrovic 2006, §5.1)"});
     fn(&VolumeParams::target_strength,
        ParamInfo{"target_strength", "κ", "m/s²", 0.0, 1e4,
-                 "Acceleration per unit of the density force toward the target (Petrovic 2006, "
-                 "eq. 3 and the force after it)"}
+                 "Acceleration per unit of the density force toward the target, relative to "
+                 "the target's mean density (Petrovic 2006, eq. 3 and the force after it)"}
            .soft(0.0, 100.0));
     fn(&VolumeParams::target_levels,
        ParamInfo{"target_levels", "", "", 1.0, 6.0,
