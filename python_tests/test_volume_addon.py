@@ -116,3 +116,64 @@ def test_grid_preview_bakes_the_density_as_a_volume_sequence(open_fixture, tmp_p
     assert bpy.ops.hairdyn.bake() == {'FINISHED'}
     assert sorted(p.name for p in folder.iterdir()) == ["density_000002.vdb", "density_000003.vdb"]
     assert (obj.data.frame_start, obj.data.frame_duration) == (2, 2)
+
+
+def test_target_from_a_frame_of_the_bake(open_fixture, tmp_path):
+    """Target from Bake Frame (§5.2): a snapshot of a baked frame becomes the Target, placed
+    as the head at the first simulated frame carries it; it outlives a new bake, and the run
+    directs toward it. A frame the bake lacks is an error that changes nothing."""
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    settings = hair.hairdyn
+    settings.method = 'STRANDS'
+    settings.strands.children_per_guide = 0
+    settings.frame_start, settings.frame_end = 1, 8
+    settings.cache_directory = str(tmp_path)
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    from hairdyn.cache import Cache
+
+    baked = Cache.open(bake.cache_directory(hair)).read_frame(6)["position"].copy()
+    with pytest.raises(RuntimeError, match="Frame 99 is not in the cache"):
+        bpy.ops.hairdyn.target_from_bake(frame=99)
+    assert settings.volume_options.target is None
+
+    assert bpy.ops.hairdyn.target_from_bake(frame=6) == {'FINISHED'}
+    target = settings.volume_options.target
+    assert target is not None and target.name == "Hair target 6" and target.hide_render
+    shown = np.empty(len(target.data.points) * 3, dtype=np.float32)
+    target.data.position_data.foreach_get("vector", shown)
+    # In the head's frame the snapshot is the baked frame 6.
+    head = settings.head or hair.data.surface
+    scene = bpy.context.scene
+    heads = {}
+    for frame in (1, 6):
+        scene.frame_set(frame)
+        heads[frame] = np.array(
+            head.evaluated_get(bpy.context.evaluated_depsgraph_get()).matrix_world
+        )
+    assert not np.allclose(heads[1], heads[6])  # the head turns: the placement matters
+
+    def in_head(matrix, points):
+        inverse = np.linalg.inv(matrix)
+        return points @ inverse[:3, :3].T + inverse[:3, 3]
+
+    np.testing.assert_allclose(
+        in_head(heads[1], shown.reshape(-1, 3)), in_head(heads[6], baked), atol=1e-5
+    )
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}  # a new bake keeps the snapshot
+    assert settings.volume_options.target == target
+    cache = Cache.open(bake.cache_directory(hair))
+    report = cache.manifest["report"]
+    assert np.isfinite(report["target_error"]) and report["target_error"] > 0.0
+    # Directed: eq. 3's error to the snapshot falls over the run.
+    runner = simulation.Runner(bpy.context, hair, 1, 8)
+    errors = []
+    try:
+        while not runner.done:
+            runner.advance()
+            errors.append(runner.simulation.method.attached[0].volume_pass.target_error)
+    finally:
+        runner.close()
+    print("eq. 3 error by frame:", [round(e) for e in errors])
+    assert errors[-1] < 0.2 * errors[0]

@@ -91,6 +91,7 @@ classes = (
     operators.HAIRDYN_OT_free_bake,
     export.HAIRDYN_OT_export_bake,
     operators.HAIRDYN_OT_open_frame_record,
+    operators.HAIRDYN_OT_target_from_bake,
     io_import.HAIRDYN_OT_import_tfx,
     io_import.HAIRDYN_OT_import_cem_hair,
     operators.HAIRDYN_OT_collider_add,

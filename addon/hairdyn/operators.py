@@ -4,7 +4,7 @@ report, anything else an internal-error report with its traceback on the console
 fails still records the frames it wrote in its manifest."""
 
 import bpy
-from bpy.props import BoolProperty
+from bpy.props import BoolProperty, IntProperty
 
 from .errors import operator_boundary
 
@@ -173,6 +173,36 @@ class HAIRDYN_OT_free_bake(bpy.types.Operator):
         Cache.open(directory).free()
         playback.forget(directory)
         self.report({'INFO'}, f"Freed the bake in '{directory}'")
+        return {'FINISHED'}
+
+
+class HAIRDYN_OT_target_from_bake(bpy.types.Operator):
+    """Direct the hair toward its own shape at a frame of its bake (Petrovic 2006 §5.2): a
+    snapshot of that frame becomes the volume's Target"""
+
+    bl_idname = "hairdyn.target_from_bake"
+    bl_label = "Target from Bake Frame"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    frame: IntProperty(
+        name="Frame",
+        description="The frame of this object's bake whose shape the hair is directed toward",
+    )
+
+    @classmethod
+    def poll(cls, context):
+        return _hair_poll(context)
+
+    def invoke(self, context, event):
+        self.frame = context.scene.frame_current
+        return context.window_manager.invoke_props_dialog(self)
+
+    @operator_boundary
+    def execute(self, context):
+        from .methods import volume
+
+        target = volume.target_from_bake(context, context.object, self.frame)
+        self.report({'INFO'}, f"Target: '{target.name}', frame {self.frame} of the bake")
         return {'FINISHED'}
 
 

@@ -52,9 +52,14 @@ def point_tangents(curve_offsets, positions):
     return forward
 
 
-def head_object(hair_obj, groom):
-    """The mesh the roots follow: the artist's choice, else the hair's surface / emitter."""
-    head = hair_obj.hairdyn.head or groom.surface
+def head_object(hair_obj, groom=None):
+    """The mesh the roots follow: the artist's choice, else the hair's surface / emitter (the
+    groom's, read from the object when not given)."""
+    if groom is not None:
+        surface = groom.surface
+    else:
+        surface = hair_obj.data.surface if hair_obj.type == 'CURVES' else hair_obj
+    head = hair_obj.hairdyn.head or surface
     if head is None:
         raise HairdynError(
             f"'{hair_obj.name}' has no head: set Head in the hairdyn panel, or "
