@@ -178,3 +178,44 @@ TEST(Children, InterpolationBlendsByInverseDistance)
     EXPECT_LE(glm::length(children.positions()[j] - expected), 1e-6f) << j;
   }
 }
+
+TEST(Children, BlendCarriesGuideValuesAsThePositionsAre)
+{
+  /* Values per guide point (shading normals, say): a child beside one guide takes that guide's
+   * value at its place along it; a child blending two takes the weighted blend. */
+  Guides guides;
+  std::vector<vec3> values(guides.positions.size());
+  for (size_t i = 0; i < values.size(); i++) {
+    values[i] = vec3(float(i), 1.0f - 0.1f * float(i), 0.5f);
+  }
+  ChildHairs around = ChildHairs::around_guides(guides.offsets, 3, 0.01f, 4);
+  around.update(guides.positions, guides.root_frames);
+  std::vector<vec3> carried(size_t(around.positions().size()));
+  around.blend(values, carried);
+  for (int64_t c = 0; c < around.curves_num(); c++) {
+    const int64_t guide = c / 3; /* children come guide by guide */
+    const int64_t n = around.curve_offsets()[c + 1] - around.curve_offsets()[c];
+    ASSERT_EQ(n, guides.offsets[size_t(guide) + 1] - guides.offsets[size_t(guide)]);
+    for (int64_t j = 0; j < n; j++) {
+      EXPECT_EQ(carried[size_t(around.curve_offsets()[c] + j)],
+                values[size_t(guides.offsets[size_t(guide)] + j)])
+          << c << " " << j;
+    }
+  }
+  Guides pair;
+  pair.offsets = {0, 9, 18};
+  pair.positions.assign(guides.positions.begin(), guides.positions.begin() + 9);
+  for (int j = 0; j < 9; j++) {
+    pair.positions.push_back(pair.positions[size_t(j)] + vec3(0.04f, 0.0f, 0.0f));
+  }
+  pair.root_frames.assign(2, root_frame_from_normal(vec3(0.0f, 0.0f, 1.0f)));
+  const std::vector<vec3> roots{pair.positions[0] + vec3(0.01f, 0.0f, 0.0f)};
+  ChildHairs between = ChildHairs::between_guides(pair.offsets, pair.positions,
+                                                  pair.root_frames, roots, 3);
+  std::vector<vec3> blended(9);
+  between.blend(Span<vec3>(values).slice(0, 18), blended);
+  for (int64_t j = 0; j < 9; j++) {
+    const vec3 expected = 0.75f * values[size_t(j)] + 0.25f * values[size_t(9 + j)];
+    EXPECT_LE(glm::length(blended[size_t(j)] - expected), 1e-5f) << j;
+  }
+}

@@ -39,6 +39,40 @@ def test_volume_options_report_and_shell_normal_attribute(open_fixture, tmp_path
     assert np.isfinite(shown).all() and np.abs(shown).max() > 0.5
 
 
+def test_child_hairs_carry_the_shell_normals(open_fixture, tmp_path):
+    """§4.1's normals on the child hairs too: each child point takes its guide's normal at its
+    place along it (children beside their guides), unit length, in the output and the cache."""
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    settings = hair.hairdyn
+    settings.method = 'STRANDS'
+    settings.strands.children_per_guide = 2
+    settings.volume_options.use_shell_normals = True
+    settings.frame_start, settings.frame_end = 1, 3
+    settings.cache_directory = str(tmp_path)
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    from hairdyn.cache import Cache
+
+    cache = Cache.open(bake.cache_directory(hair))
+    guides = cache.read_frame(3)["shell_normal"]
+    children = cache.read_stream("children", 3)["shell_normal"]
+    assert np.allclose(np.linalg.norm(children, axis=1), 1.0, atol=1e-5)
+    guide_offsets = cache.curve_offsets()
+    child_offsets = cache.stream_offsets("children")
+    for child in range(len(child_offsets) - 1):
+        guide = child // 2  # children come guide by guide
+        mine = children[child_offsets[child] : child_offsets[child + 1]]
+        theirs = guides[guide_offsets[guide] : guide_offsets[guide + 1]]
+        assert mine.shape == theirs.shape
+        np.testing.assert_allclose(mine, theirs, atol=1e-5)
+    bpy.context.scene.frame_set(3)  # playback shows the baked frame
+    attribute = settings.output_children.data.attributes["shell_normal"]
+    shown = np.empty(len(attribute.data) * 3, dtype=np.float32)
+    attribute.data.foreach_get("vector", shown)
+    np.testing.assert_array_equal(shown.reshape(-1, 3), children)
+
+
 def test_sintel_shell_normals_against_the_default_hair_shader(artifacts):
     hair, bust = sintel_scene()
     settings = hair.hairdyn

@@ -353,6 +353,26 @@ void bind_strands(py::module_ &m)
           py::arg("guide_positions_wo"), py::arg("guide_root_frames"),
           "Place the children on the guides' current shapes (e.g. StrandSolver.positions and "
           "StrandSolver.root_frames).")
+      .def(
+          "blend",
+          [](const ChildHairs &self, const py::handle guide_values) {
+            const Span<vec3> values = as_float3(guide_values, "guide_values");
+            if (values.size() != self.guide_points_num()) {
+              fail("guide_values must have " + std::to_string(self.guide_points_num()) +
+                   " rows, one per guide point, not " + std::to_string(values.size()));
+            }
+            py::array_t<float> result({py::ssize_t(self.curve_offsets().last()), py::ssize_t(3)});
+            {
+              py::gil_scoped_release release;
+              self.blend(values, MutableSpan<vec3>(reinterpret_cast<vec3 *>(result.mutable_data()),
+                                                   self.curve_offsets().last()));
+            }
+            return result;
+          },
+          py::arg("guide_values"),
+          "A value per guide point (N, 3) carried to every child point as the positions are, "
+          "without the root offset (e.g. shading normals; renormalise them): (children's "
+          "points, 3) float32.")
       .def_property_readonly("curves_num", &ChildHairs::curves_num)
       .def_property_readonly(
           "curve_offsets",

@@ -37,6 +37,10 @@ class ChildHairs {
    * `guide_offsets`, one root frame per guide (columns tangent, bitangent, normal), e.g. from
    * StrandSolver::root_frames(). */
   void update(Span<vec3> guide_positions_wo, Span<mat3> guide_root_frames_wo);
+  /* A value per guide point (e.g. a shading normal) carried to every child point as the
+   * positions are, without the root offset: the influencing guides' values at the child
+   * point's place along them, blended by weight. */
+  void blend(Span<vec3> guide_values, MutableSpan<vec3> r_child_values) const;
 
   int64_t curves_num() const { return int64_t(curve_offsets_.size()) - 1; }
   int64_t guides_num() const { return int64_t(guide_offsets_.size()) - 1; }
@@ -50,6 +54,11 @@ class ChildHairs {
     float weight;
     vec3 offset_root; /* the child's root relative to the guide's, in the guide's root frame */
   };
+
+  /* fn(influence, i, f) for each guide influencing point j of `child`, which has n points:
+   * the guide's points i and i + 1 around the child point's place, at fraction f between. */
+  template<typename Fn> void for_each_influence(int64_t child, int64_t j, int64_t n,
+                                                const Fn &fn) const;
 
   ChildHairs(Span<int32_t> guide_offsets, std::vector<int32_t> influence_offsets,
              std::vector<Influence> influences, Span<int32_t> child_points_nums);

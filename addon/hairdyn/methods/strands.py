@@ -55,11 +55,16 @@ class Attached:
     a bake's cache, and its report fields."""
 
     strand_columns = {}
+    child_columns = {}  # what of strand_columns the child hairs carry too
 
     def after_step(self, solver, head_matrix):
         pass
 
     def strand_attributes(self):
+        return {}
+
+    def child_attributes(self, children):
+        """Per child point arrays for child_columns (children: the native ChildHairs)."""
         return {}
 
     def outputs_written(self, hair_obj):
@@ -240,10 +245,20 @@ class Strands(Method):
         if self.children is None:
             return {}
         offsets = np.asarray(self.children.curve_offsets)
+        columns = {"position": 3}
+        for item in self.attached:
+            columns.update(item.child_columns)
+
+        def read():
+            arrays = {"position": self.children.positions}
+            for item in self.attached:
+                arrays.update(item.child_attributes(self.children))
+            return arrays
+
         return {
             "children": Stream(
-                {"position": 3},
-                lambda: {"position": self.children.positions},
+                columns,
+                read,
                 int(offsets[-1]),
                 offsets=offsets,
                 outputs=("output_children",),

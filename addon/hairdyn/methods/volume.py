@@ -53,7 +53,7 @@ class VolumeAttached(Attached):
         self.preview = preview  # GridPreview, or None
         self.ms, self.density_max, self.normals = [], 0.0, None
         if shell is not None:
-            self.strand_columns = {"shell_normal": 3}
+            self.strand_columns = self.child_columns = {"shell_normal": 3}
             self.normals = np.array(shell.rest_normals, dtype=np.float32)
 
     def after_step(self, solver, head_matrix):
@@ -71,6 +71,14 @@ class VolumeAttached(Attached):
 
     def strand_attributes(self):
         return {} if self.normals is None else {"shell_normal": self.normals}
+
+    def child_attributes(self, children):
+        """The guides' shell normals carried to the child hairs (§4.1), unit length."""
+        if self.normals is None:
+            return {}
+        normals = children.blend(self.normals)
+        lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+        return {"shell_normal": normals / np.maximum(lengths, 1e-12)}
 
     def report(self):
         if self.volume_pass is None:
