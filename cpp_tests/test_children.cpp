@@ -30,6 +30,21 @@ struct Guides {
   }
 };
 
+/* The first guide of Guides (9 points) and a copy 4 cm along x, both with root frames from
+ * `root_normal`. */
+Guides two_guides_apart(const vec3 &root_normal)
+{
+  const Guides guides;
+  Guides pair;
+  pair.offsets = {0, 9, 18};
+  pair.positions.assign(guides.positions.begin(), guides.positions.begin() + 9);
+  for (int j = 0; j < 9; j++) {
+    pair.positions.push_back(pair.positions[size_t(j)] + vec3(0.04f, 0.0f, 0.0f));
+  }
+  pair.root_frames.assign(2, root_frame_from_normal(root_normal));
+  return pair;
+}
+
 float max_distance(const Span<vec3> a, const Span<vec3> b)
 {
   float result = 0.0f;
@@ -157,14 +172,7 @@ TEST(Children, InterpolationBlendsByInverseDistance)
   /* Two guides of the same bent shape 4 cm apart: a hair rooted a quarter of the way from the
    * first has weights 3/4 and 1/4 and, the offsets cancelling in the shared frames, lies at
    * 3/4 G0 + 1/4 G1 all along. */
-  Guides guides;
-  Guides pair;
-  pair.offsets = {0, 9, 18};
-  pair.positions.assign(guides.positions.begin(), guides.positions.begin() + 9);
-  for (int j = 0; j < 9; j++) {
-    pair.positions.push_back(pair.positions[size_t(j)] + vec3(0.04f, 0.0f, 0.0f));
-  }
-  pair.root_frames.assign(2, root_frame_from_normal(vec3(0.2f, 0.1f, 1.0f)));
+  Guides pair = two_guides_apart(vec3(0.2f, 0.1f, 1.0f));
   const std::vector<vec3> roots{pair.positions[0] + vec3(0.01f, 0.0f, 0.0f)};
   ChildHairs children = ChildHairs::between_guides(pair.offsets, pair.positions,
                                                    pair.root_frames, roots, 3);
@@ -202,13 +210,7 @@ TEST(Children, BlendCarriesGuideValuesAsThePositionsAre)
           << c << " " << j;
     }
   }
-  Guides pair;
-  pair.offsets = {0, 9, 18};
-  pair.positions.assign(guides.positions.begin(), guides.positions.begin() + 9);
-  for (int j = 0; j < 9; j++) {
-    pair.positions.push_back(pair.positions[size_t(j)] + vec3(0.04f, 0.0f, 0.0f));
-  }
-  pair.root_frames.assign(2, root_frame_from_normal(vec3(0.0f, 0.0f, 1.0f)));
+  Guides pair = two_guides_apart(vec3(0.0f, 0.0f, 1.0f));
   const std::vector<vec3> roots{pair.positions[0] + vec3(0.01f, 0.0f, 0.0f)};
   ChildHairs between = ChildHairs::between_guides(pair.offsets, pair.positions,
                                                   pair.root_frames, roots, 3);

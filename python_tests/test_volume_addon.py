@@ -13,17 +13,25 @@ from render_check import cycles_pixels
 from test_sintel import sintel_scene
 
 
-def test_volume_options_report_and_shell_normal_attribute(open_fixture, tmp_path):
+def shake_hair(open_fixture, tmp_path, frames, children_per_guide=0, **options):
+    """The shipped head-shake example's hair on the Strands method, active, baking frames
+    1..frames into tmp_path, with these volume_options switched on."""
     open_fixture("head_shake.blend")
     hair = bpy.data.objects["Hair"]
     settings = hair.hairdyn
     settings.method = 'STRANDS'
-    settings.strands.children_per_guide = 0
-    settings.volume_options.use_smoothing = True
-    settings.volume_options.use_shell_normals = True
-    settings.frame_start, settings.frame_end = 1, 6
+    settings.strands.children_per_guide = children_per_guide
+    for name, value in options.items():
+        setattr(settings.volume_options, name, value)
+    settings.frame_start, settings.frame_end = 1, frames
     settings.cache_directory = str(tmp_path)
     bpy.context.view_layer.objects.active = hair
+    return hair
+
+
+def test_volume_options_report_and_shell_normal_attribute(open_fixture, tmp_path):
+    hair = shake_hair(open_fixture, tmp_path, 6, use_smoothing=True, use_shell_normals=True)
+    settings = hair.hairdyn
     assert bpy.ops.hairdyn.bake() == {'FINISHED'}
     from hairdyn.cache import Cache
 
@@ -42,15 +50,8 @@ def test_volume_options_report_and_shell_normal_attribute(open_fixture, tmp_path
 def test_child_hairs_carry_the_shell_normals(open_fixture, tmp_path):
     """§4.1's normals on the child hairs too: each child point takes its guide's normal at its
     place along it (children beside their guides), unit length, in the output and the cache."""
-    open_fixture("head_shake.blend")
-    hair = bpy.data.objects["Hair"]
+    hair = shake_hair(open_fixture, tmp_path, 3, children_per_guide=2, use_shell_normals=True)
     settings = hair.hairdyn
-    settings.method = 'STRANDS'
-    settings.strands.children_per_guide = 2
-    settings.volume_options.use_shell_normals = True
-    settings.frame_start, settings.frame_end = 1, 3
-    settings.cache_directory = str(tmp_path)
-    bpy.context.view_layer.objects.active = hair
     assert bpy.ops.hairdyn.bake() == {'FINISHED'}
     from hairdyn.cache import Cache
 
@@ -115,15 +116,8 @@ def test_grid_preview_bakes_the_density_as_a_volume_sequence(open_fixture, tmp_p
     from hairdyn import volume_vdb
     from hairdyn.errors import HairdynError
 
-    open_fixture("head_shake.blend")
-    hair = bpy.data.objects["Hair"]
+    hair = shake_hair(open_fixture, tmp_path, 4, use_grid_preview=True)
     settings = hair.hairdyn
-    settings.method = 'STRANDS'
-    settings.strands.children_per_guide = 0
-    settings.volume_options.use_grid_preview = True
-    settings.frame_start, settings.frame_end = 1, 4
-    settings.cache_directory = str(tmp_path)
-    bpy.context.view_layer.objects.active = hair
     writer, reason = volume_vdb.find_writer()
     if writer is None:
         with pytest.raises(HairdynError, match="Grid Preview"):
@@ -156,14 +150,8 @@ def test_target_from_a_frame_of_the_bake(open_fixture, tmp_path):
     """Target from Bake Frame (§5.2): a snapshot of a baked frame becomes the Target, placed
     as the head at the first simulated frame carries it; it outlives a new bake, and the run
     directs toward it. A frame the bake lacks is an error that changes nothing."""
-    open_fixture("head_shake.blend")
-    hair = bpy.data.objects["Hair"]
+    hair = shake_hair(open_fixture, tmp_path, 8)
     settings = hair.hairdyn
-    settings.method = 'STRANDS'
-    settings.strands.children_per_guide = 0
-    settings.frame_start, settings.frame_end = 1, 8
-    settings.cache_directory = str(tmp_path)
-    bpy.context.view_layer.objects.active = hair
     assert bpy.ops.hairdyn.bake() == {'FINISHED'}
     from hairdyn.cache import Cache
 

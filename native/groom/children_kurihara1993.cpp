@@ -110,20 +110,28 @@ ChildHairs ChildHairs::between_guides(const Span<int32_t> guide_offsets,
 }
 
 template<typename Fn>
-void ChildHairs::for_each_influence(const int64_t child, const int64_t j, const int64_t n,
-                                    const Fn &fn) const
+void ChildHairs::blend_over_guides(const MutableSpan<vec3> r_child_values, const Fn &term) const
 {
-  /* Child point j sits at parameter u = j / (n − 1) along each influencing guide. */
-  const float u = float(j) / float(n - 1);
-  for (int32_t k = influence_offsets_[size_t(child)]; k < influence_offsets_[size_t(child + 1)];
-       k++)
-  {
-    const Influence &influence = influences_[size_t(k)];
-    const IndexRange guide = curve_points(guide_offsets_, influence.guide);
-    const float s = u * float(guide.size - 1);
-    const int64_t i0 = std::min<int64_t>(int64_t(s), guide.size - 2);
-    fn(influence, guide.start + i0, s - float(i0));
-  }
+  parallel_for(curves_num(), 256, [&](const IndexRange range) {
+    for (int64_t child = range.start; child < range.one_after_last(); child++) {
+      const IndexRange points = curve_points(curve_offsets_, child);
+      for (int64_t j = 0; j < points.size; j++) {
+        /* Child point j sits at parameter u = j / (n − 1) along each influencing guide. */
+        const float u = float(j) / float(points.size - 1);
+        vec3 value(0.0f);
+        for (int32_t k = influence_offsets_[size_t(child)];
+             k < influence_offsets_[size_t(child + 1)]; k++)
+        {
+          const Influence &influence = influences_[size_t(k)];
+          const IndexRange guide = curve_points(guide_offsets_, influence.guide);
+          const float s = u * float(guide.size - 1);
+          const int64_t i0 = std::min<int64_t>(int64_t(s), guide.size - 2);
+          value += influence.weight * term(influence, guide.start + i0, s - float(i0));
+        }
+        r_child_values[points.start + j] = value;
+      }
+    }
+  });
 }
 
 void ChildHairs::update(const Span<vec3> guide_positions_wo, const Span<mat3> guide_root_frames_wo)
@@ -145,22 +153,10 @@ void ChildHairs::update(const Span<vec3> guide_positions_wo, const Span<mat3> gu
   });
   /* The guide's point at the child point's place plus the root offset carried by the guide's
    * frame, blended by weight. */
-  parallel_for(curves_num(), 256, [&](const IndexRange range) {
-    for (int64_t child = range.start; child < range.one_after_last(); child++) {
-      const IndexRange points = curve_points(curve_offsets_, child);
-      for (int64_t j = 0; j < points.size; j++) {
-        vec3 position(0.0f);
-        for_each_influence(child, j, points.size,
-                           [&](const Influence &influence, const int64_t i, const float f) {
-                             const vec3 on_guide = glm::mix(guide_positions_wo[i],
-                                                            guide_positions_wo[i + 1], f);
-                             const mat3 &frame = guide_frames_wo_[size_t(f < 0.5f ? i : i + 1)];
-                             position += influence.weight *
-                                         (on_guide + frame * influence.offset_root);
-                           });
-        positions_wo_[size_t(points.start + j)] = position;
-      }
-    }
+  blend_over_guides(positions_wo_, [&](const Influence &influence, const int64_t i, const float f) {
+    const mat3 &frame = guide_frames_wo_[size_t(f < 0.5f ? i : i + 1)];
+    return glm::mix(guide_positions_wo[i], guide_positions_wo[i + 1], f) +
+           frame * influence.offset_root;
   });
 }
 
@@ -168,19 +164,8 @@ void ChildHairs::blend(const Span<vec3> guide_values, const MutableSpan<vec3> r_
 {
   assert(guide_values.size() == guide_points_num());
   assert(r_child_values.size() == curve_offsets_.back());
-  parallel_for(curves_num(), 256, [&](const IndexRange range) {
-    for (int64_t child = range.start; child < range.one_after_last(); child++) {
-      const IndexRange points = curve_points(curve_offsets_, child);
-      for (int64_t j = 0; j < points.size; j++) {
-        vec3 value(0.0f);
-        for_each_influence(child, j, points.size,
-                           [&](const Influence &influence, const int64_t i, const float f) {
-                             value += influence.weight *
-                                      glm::mix(guide_values[i], guide_values[i + 1], f);
-                           });
-        r_child_values[points.start + j] = value;
-      }
-    }
+  blend_over_guides(r_child_values, [&](const Influence &, const int64_t i, const float f) {
+    return glm::mix(guide_values[i], guide_values[i + 1], f);
   });
 }
 

@@ -55,10 +55,10 @@ class ChildHairs {
     vec3 offset_root; /* the child's root relative to the guide's, in the guide's root frame */
   };
 
-  /* fn(influence, i, f) for each guide influencing point j of `child`, which has n points:
-   * the guide's points i and i + 1 around the child point's place, at fraction f between. */
-  template<typename Fn> void for_each_influence(int64_t child, int64_t j, int64_t n,
-                                                const Fn &fn) const;
+  /* Every child point gets Σ weight · term(influence, i, f) over its influencing guides, with
+   * i and i + 1 the guide's points around the child point's place and f the fraction between. */
+  template<typename Fn>
+  void blend_over_guides(MutableSpan<vec3> r_child_values, const Fn &term) const;
 
   ChildHairs(Span<int32_t> guide_offsets, std::vector<int32_t> influence_offsets,
              std::vector<Influence> influences, Span<int32_t> child_points_nums);
