@@ -536,7 +536,8 @@ def _set_texspace(mesh, positions):
     size = (high - low) / np.float32(2)
     size[size == 0] = 1
     size[(size > 0) & (size < 1e-5)] = np.float32(1e-5)
-    mesh.use_auto_texspace = False
+    if mesh.use_auto_texspace:
+        mesh.use_auto_texspace = False
     mesh.texspace_location = location
     mesh.texspace_size = size
 
