@@ -273,3 +273,27 @@ def test_head_without_vertices_is_a_clear_error(empty_scene):
     obj.hairdyn.method = 'STRANDS'
     with pytest.raises(HairdynError, match="The mesh 'Head' has no vertices"):
         simulation.Simulation(obj, depsgraph(), empty_scene)
+
+
+@pytest.mark.parametrize("count", [1, 700, 1024, 1537])
+def test_points_output_positions_and_texture_space_are_blenders(empty_scene, count):
+    """write_points puts the positions in bit for bit, whichever way the Blender stores them,
+    and leaves the texture space Blender's automatic one would be (on meshes whose positions
+    are vertices, hairdyn finds it in numpy; Blender's own search is slower there)."""
+    rng = np.random.default_rng(count)
+    positions = (rng.normal(size=(count, 3)) * [1.0, 1e-7, 0.0]).astype(np.float32)
+    positions[:, 2] = 2.5  # a flat axis: Blender makes its size 1; the second one is tiny
+    points = bridge.ensure_points_output(None, "Points")
+    bridge.write_points(points, positions)
+    bridge.write_points(points, positions)  # the second frame: the mesh kept
+    reference = bpy.data.meshes.new("Reference")
+    reference.vertices.add(count)
+    reference.vertices.foreach_set("co", positions.ravel())
+    reference.update()
+    assert reference.use_auto_texspace
+    for mesh in (points.data, points.evaluated_get(depsgraph()).data):
+        back = np.empty_like(positions)
+        mesh.vertices.foreach_get("co", back.ravel())
+        assert back.tobytes() == positions.tobytes()
+        assert tuple(mesh.texspace_location) == tuple(reference.texspace_location)
+        assert tuple(mesh.texspace_size) == tuple(reference.texspace_size)

@@ -1,5 +1,6 @@
 """Bake to a cache on disk, play it back, resume it; bad caches give errors naming files."""
 import json
+from pathlib import Path
 
 import bpy
 import numpy as np
@@ -307,3 +308,43 @@ def test_resume_after_the_groom_moved_is_refused(saved_shake):
         cache.frame_path(frame).unlink()
     with pytest.raises(CacheError, match="points moved since the bake"):
         bake.start_bake(bpy.context, hair, 24)
+
+
+def test_reads_are_bit_exact_and_reused_buffers_stay_put(tmp_path):
+    """A frame read through its memory map is the frame written, bit for bit; playback's reads
+    (reuse) fill the same arrays frame after frame, and no map of the file stays open."""
+    cache = make_cache(tmp_path)
+    frames = {frame: frame_data(seed=frame) for frame in (1, 2)}
+    frames[2]["position"][0] = [3e38, 3e38, 0]  # finite values whose sum overflows
+    for frame, data in frames.items():
+        cache.write_frame(frame, data)
+    first = cache.read_frame(1, reuse=True)
+    kept = {name: array for name, array in first.items()}
+    for frame in (2, 1, 2):
+        back = cache.read_frame(frame, reuse=True)
+        assert all(back[name] is kept[name] for name in kept)
+        for name, values in frames[frame].items():
+            assert back[name].dtype == np.float32 and back[name].flags.c_contiguous
+            assert back[name].tobytes() == values.tobytes()
+    fresh = cache.read_frame(1)
+    assert fresh["position"] is not kept["position"]
+    assert fresh["position"].tobytes() == frames[1]["position"].tobytes()
+    maps = Path("/proc/self/maps")
+    if maps.is_file():
+        assert str(cache.frame_path(1)) not in maps.read_text()
+
+
+def test_a_frame_cut_short_or_reordered_is_refused(tmp_path):
+    cache = make_cache(tmp_path)
+    cache.write_frame(1, frame_data())
+    path = cache.frame_path(1)
+    whole = path.read_bytes()
+    path.write_bytes(whole[:-1])  # one byte short of its header's table
+    with pytest.raises(CacheError, match=r"frame_000001.npy' is corrupted or truncated \("):
+        cache.read_frame(1, reuse=True)
+    np.save(path, np.asfortranarray(np.zeros((6, 4), np.float32)))
+    with pytest.raises(CacheError, match=r"holds float32 \(6, 4\) in Fortran order"):
+        cache.read_frame(1)
+    path.write_bytes(whole)
+    assert cache.read_frame(1, reuse=True)["position"].tobytes() == \
+        frame_data()["position"].tobytes()

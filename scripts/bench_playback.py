@@ -1,6 +1,8 @@
 """Benchmark: cached playback of 10,000 strands x 16 segments (issue 6). Bakes nothing: it
 writes a synthetic cache of that size, then times loading frames into the output objects the
-way the frame-change handler does. Prints figures; asserts nothing.
+way the frame-change handler does, and the parts: reading the frame, writing it into the output
+objects, Blender evaluating them. Prints figures; asserts nothing. Runs in the blender binary
+and under the bpy module (python scripts/bench_playback.py -- OUT.json).
 
     blender -b --factory-startup --python scripts/bench_playback.py -- [OUT.json]
 """
@@ -50,18 +52,34 @@ def main(out_path):
             cache.write_frame(frame, {name: rng.normal(size=(points, 3)).astype(np.float32)
                                       for name in ("position", "velocity", "direction")})
         playback.load_frame(hair, 1)  # creates the output objects
-        seconds = []
+        seconds, loading, evaluating = [], [], []
         for frame in list(range(2, FRAMES + 1)) * 2:
             start = time.perf_counter()
             playback.load_frame(hair, frame)
+            loaded = time.perf_counter()
             bpy.context.evaluated_depsgraph_get().update()
             seconds.append(time.perf_counter() - start)
+            loading.append(loaded - start)
+            evaluating.append(seconds[-1] - loading[-1])
+        opened = playback.open_cache(directory)[0]
+        reading = []
+        for frame in list(range(2, FRAMES + 1)) * 2:  # the read alone, as playback reads
+            start = time.perf_counter()
+            opened.read_frame(frame, reuse=True)
+            reading.append(time.perf_counter() - start)
     ms = 1000 * statistics.median(seconds)
+    parts = {"read": reading, "load": loading, "evaluate": evaluating}
+    parts = {name: 1000 * statistics.median(values) for name, values in parts.items()}
     result = {"blender_version": bpy.app.version_string, "strands": STRANDS,
-              "points": points, "playback_ms_per_frame": ms, "playback_fps": 1000 / ms}
+              "points": points, "playback_ms_per_frame": ms, "playback_fps": 1000 / ms,
+              "read_ms": parts["read"], "write_ms": parts["load"] - parts["read"],
+              "evaluate_ms": parts["evaluate"]}
     print(f"bench: cached playback of {STRANDS} strands x {POINTS_PER_STRAND - 1} segments "
           f"({points} points, 3 attributes): {ms:.1f} ms per frame ({1000 / ms:.0f} frames/s), "
           f"Blender {bpy.app.version_string}")
+    print(f"bench: of which about {parts['read']:.1f} ms reading the frame, "
+          f"{parts['load'] - parts['read']:.1f} ms writing it into the two output objects, "
+          f"{parts['evaluate']:.1f} ms Blender evaluating them (medians of each part)")
     if out_path:
         Path(out_path).parent.mkdir(parents=True, exist_ok=True)
         Path(out_path).write_text(json.dumps(result, indent=2) + "\n")

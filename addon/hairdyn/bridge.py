@@ -480,9 +480,66 @@ def write_points(obj, positions_wo, attributes=None):
     if len(mesh.vertices) != count or len(mesh.edges) or len(mesh.polygons):
         mesh.clear_geometry()
         mesh.vertices.add(count)
-    mesh.vertices.foreach_set("co", np.ascontiguousarray(positions_wo, dtype=np.float32).ravel())
+    positions = np.ascontiguousarray(positions_wo, dtype=np.float32)
+    attribute = _position_attribute(mesh)
+    if attribute is not None:
+        # Straight into the positions (Blender 3.5 and later keep them as this attribute):
+        # MeshVertex.co there is a proxy that Blender sets one vertex at a time, 600 times
+        # slower (65 ms for 170,000 vertices on bpy 5.0).
+        attribute.data.foreach_set("vector", positions.ravel())
+        if not getattr(mesh, "use_auto_texspace", True):  # a file last played by Blender 3.4
+            mesh.use_auto_texspace = True
+    else:
+        mesh.vertices.foreach_set("co", positions.ravel())
+        _set_texspace(mesh, positions)
     write_point_attributes(mesh, attributes or {})
     mesh.update()
+
+
+def _position_attribute(mesh):
+    """The mesh's "position" point attribute, or None where vertices hold their positions."""
+    attribute = mesh.attributes.get("position")
+    if attribute is None or attribute.domain != 'POINT' or attribute.data_type != 'FLOAT_VECTOR':
+        return None
+    return attribute
+
+
+def _bounds(positions):
+    """(min, max) (3,) float32 of (N, 3) positions, N > 0; numpy reduces (N, 3) along N three
+    values at a time, so rows are reduced 512 points wide first (25 times faster)."""
+    wide = len(positions) // 512 * 512
+    low, high = positions[wide:].min(axis=0, initial=np.inf), positions[wide:].max(
+        axis=0, initial=-np.inf)
+    if wide:
+        block = positions[:wide].reshape(-1, 3 * 512)
+        low = np.minimum(low, np.minimum.reduce(block).reshape(-1, 3).min(axis=0))
+        high = np.maximum(high, np.maximum.reduce(block).reshape(-1, 3).max(axis=0))
+    return low.astype(np.float32), high.astype(np.float32)
+
+
+def _set_texspace(mesh, positions):
+    """The texture space Blender's automatic one would be (BKE_mesh_texspace_calc: the
+    positions' bounding box, sizes of 0 made 1 and tiny ones 1e-5), set from numpy.
+
+    Where vertices hold their positions (before Blender 3.5), Blender finds the bounds for the
+    automatic texture space in a loop of its own that costs 5 ms for 170,000 points at each
+    evaluation, a third of the point object's; numpy finds them in 0.3 ms. Meshes with a
+    position attribute keep Blender's automatic one, which reuses the bounds Blender caches.
+    Either way the point object's texture space is the automatic one."""
+    if not hasattr(mesh, "use_auto_texspace"):
+        return
+    if len(positions):
+        low, high = _bounds(positions)
+    else:
+        low, high = np.full(3, -1, np.float32), np.full(3, 1, np.float32)
+    location = np.float32(0.5) * (low + high)
+    size = (high - low) / np.float32(2)
+    size[size == 0] = 1
+    size[(size > 0) & (size < 1e-5)] = np.float32(1e-5)
+    if mesh.use_auto_texspace:
+        mesh.use_auto_texspace = False
+    mesh.texspace_location = location
+    mesh.texspace_size = size
 
 
 def write_point_attributes(data, attributes):

@@ -18,12 +18,16 @@ anything is written.
 
 Nothing read back is trusted: the manifest's counts and column spans are checked when it is
 opened, and every table read is checked for its dtype, shape and finite values before it is
-handed out (CacheError naming the file otherwise). A resumed bake checks the frames it keeps
-(prepare_resume) and refuses a groom whose rest positions moved since the bake started (the
-manifest keeps a hash of them).
+handed out (CacheError naming the file otherwise). A table is read through a memory map of its
+file and its columns copied straight out of the map (into the cache's own buffers for playback:
+no allocation per frame); the map goes with the table's last view. A file is never changed in
+place (it is replaced by a rename), so a map sees one whole file. A resumed bake checks the
+frames it keeps (prepare_resume) and refuses a groom whose rest positions moved since the bake
+started (the manifest keeps a hash of them).
 """
 import hashlib
 import json
+import mmap
 import os
 import re
 from pathlib import Path
@@ -128,12 +132,38 @@ class _Layout:
                              f"{', '.join(bad)}; it was not written to the cache")
         return table
 
-    def unpack(self, path, table):
-        """The named columns of a table read from `path`, after checking its dtype, shape and
-        values: CacheError naming the file otherwise."""
-        if table.dtype != np.float32 or table.shape != (self.points_num, self.width):
-            raise CacheError(f"The cache frame '{path}' holds {table.dtype} {table.shape}, the "
-                             f"manifest says float32 ({self.points_num}, {self.width})")
+    def read(self, path, what, buffers=None):
+        """The named columns of the table in the .npy file `path`, after checking its dtype,
+        shape and values: CacheError naming the file otherwise. The file is memory-mapped and
+        each column copied once out of the map, into `buffers` ({name: array} that read fills
+        in and returns, so nothing is allocated per frame) or into new arrays."""
+        table = _mapped_table(path, what)
+        self._check(path, table)
+        if buffers is None:
+            return {name: _column(table, start, stop)
+                    for name, (start, stop) in self.columns.items()}
+        if not buffers:
+            buffers.update({name: _column(table, start, stop)
+                            for name, (start, stop) in self.columns.items()})
+        else:
+            for name, (start, stop) in self.columns.items():
+                _column(table, start, stop, out=buffers[name])
+        return buffers
+
+    def _check(self, path, table):
+        """CacheError unless `table` is this layout's float32 (points, width) of finite
+        values."""
+        if table.dtype != np.float32 or table.shape != (self.points_num, self.width) or \
+                not table.flags.c_contiguous:
+            order = "" if table.flags.c_contiguous else " in Fortran order"
+            raise CacheError(f"The cache frame '{path}' holds {table.dtype} {table.shape}"
+                             f"{order}, the manifest says float32 ({self.points_num}, "
+                             f"{self.width})")
+        # One sum finds any NaN or infinity (they make it NaN or infinite) without a mask the
+        # size of the table; only a sum that overflowed or a bad table pays for the mask.
+        with np.errstate(over="ignore", invalid="ignore"):
+            if np.isfinite(np.add.reduce(table, axis=None)):
+                return
         finite = np.isfinite(table)
         if not finite.all():
             bad = sorted(name for name, (start, stop) in self.columns.items()
@@ -141,19 +171,78 @@ class _Layout:
             point = int(np.flatnonzero(~finite.all(axis=1))[0])
             raise CacheError(f"The cache frame '{path}' has values that are not finite numbers "
                              f"in {', '.join(bad)} (point {point}): bake again")
-        return {name: _column(table, start, stop) for name, (start, stop) in self.columns.items()}
 
 
-def _column(table, start, stop):
+def _column(table, start, stop, out=None):
     """Columns start:stop of a (points, width) float32 table as a contiguous (points,) or
-    (points, stop - start) array, ready for foreach_set without another copy. Each row's
-    slice is copied as one record (numpy copies a strided 3-float slice value by value, 2.5
-    times slower)."""
+    (points, stop - start) array (`out` when given), ready for foreach_set without another
+    copy. Each row's slice is copied as one record (numpy copies a strided 3-float slice
+    value by value, 2.5 times slower)."""
     width = stop - start
-    record = np.dtype({"names": ["v"], "formats": [np.dtype((np.void, 4 * width))],
-                       "offsets": [4 * start], "itemsize": table.strides[0]})
-    column = np.ascontiguousarray(table.view(record)["v"]).view(np.float32)
-    return column.reshape(-1) if width == 1 else column.reshape(-1, width)
+    if out is None:
+        out = np.empty((len(table),) if width == 1 else (len(table), width), np.float32)
+    if len(table):
+        item = np.dtype((np.void, 4 * width))
+        record = np.dtype({"names": ["v"], "formats": [item], "offsets": [4 * start],
+                           "itemsize": table.strides[0]})
+        np.copyto(out.reshape(len(table), width).view(item)[:, 0], table.view(record)["v"][:, 0])
+    return out
+
+
+def _read_header(file):
+    """(shape, fortran order, dtype) of the .npy file open at its start, leaving the file at
+    its data; ValueError when the header is not one numpy writes (versions 1.0 and 2.0)."""
+    try:
+        read_header = {(1, 0): np.lib.format.read_array_header_1_0,
+                       (2, 0): np.lib.format.read_array_header_2_0}.get(
+                           np.lib.format.read_magic(file))
+        if read_header is None:
+            raise ValueError("an unknown .npy format version")
+        return read_header(file)
+    except Exception as error:  # a garbled header: numpy's parser may raise anything
+        raise ValueError(str(error) or type(error).__name__) from None  # (numpy 2 on
+        # Python 3.13: tokenize.TokenError)
+
+
+def _mapped_table(path, what):
+    """The .npy file's array over a read-only memory map of the file. Nothing else keeps the
+    map: it is unmapped as soon as the array and its views are gone. CacheError naming the file
+    when it is missing, a directory, not a plain .npy array, or shorter than its header says."""
+    if path.is_dir():
+        raise CacheError(f"The cache {what} '{path}' is a directory, not a file")
+    try:
+        with open(path, "rb") as file:
+            try:
+                shape, fortran, dtype = _read_header(file)
+                if dtype.hasobject or not all(isinstance(n, int) and n >= 0 for n in shape):
+                    raise ValueError(f"an array of {dtype} {shape}")
+            except ValueError as error:
+                raise CacheError(f"The cache {what} '{path}' is corrupted or truncated "
+                                 f"({error})") from None
+            offset = file.tell()
+            count = int(np.prod(shape, dtype=np.int64))
+            size = os.fstat(file.fileno()).st_size
+            if size < offset + count * dtype.itemsize:
+                raise CacheError(f"The cache {what} '{path}' is corrupted or truncated ({size} "
+                                 f"bytes, its header says {offset + count * dtype.itemsize})")
+            if count == 0:
+                return np.empty(shape, dtype)
+            values = np.frombuffer(_map(file), dtype=dtype, count=count, offset=offset)
+    except FileNotFoundError:
+        raise CacheError(f"The cache {what} '{path}' is missing") from None
+    except OSError as error:
+        raise CacheError(f"The cache {what} '{path}' cannot be read: "
+                         f"{error.strerror or error}") from None
+    return values.reshape(shape, order="F" if fortran else "C")
+
+
+def _map(file):
+    """A read-only memory map of a whole open file; its pages are read in by the one call
+    where the system can (MAP_POPULATE), rather than one page fault at a time."""
+    if hasattr(mmap, "MAP_POPULATE"):
+        return mmap.mmap(file.fileno(), 0, flags=mmap.MAP_SHARED | mmap.MAP_POPULATE,
+                         prot=mmap.PROT_READ)
+    return mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_READ)
 
 
 class Cache:
@@ -162,6 +251,7 @@ class Cache:
     def __init__(self, directory, manifest):
         self.directory = Path(directory)
         self.manifest = manifest
+        self._buffers = {}  # stream name -> {column: array} that reads with reuse fill
         self.main = _Layout(MAIN, manifest["topology"]["points"], manifest["columns"])
         _count(manifest["topology"]["curves"], "the strand count")
         self.streams = {name: _Layout(name, stream["points"], stream["columns"])
@@ -316,16 +406,11 @@ class Cache:
         for path, layout in layouts:
             try:
                 with open(path, "rb") as file:
-                    read_header = {(1, 0): np.lib.format.read_array_header_1_0,
-                                   (2, 0): np.lib.format.read_array_header_2_0}.get(
-                                       np.lib.format.read_magic(file))
-                    if read_header is None:
-                        return False
-                    shape, fortran, dtype = read_header(file)
+                    shape, fortran, dtype = _read_header(file)
                     header_end = file.tell()
                 size = path.stat().st_size
-            except Exception:  # a garbled header: numpy's parser may raise anything
-                return False  # (numpy 2 on Python 3.13: tokenize.TokenError)
+            except (OSError, ValueError):
+                return False
             expected = (layout.points_num, layout.width)
             if dtype != np.float32 or fortran or tuple(shape) != expected or \
                     size != header_end + 4 * layout.points_num * layout.width:
@@ -429,14 +514,18 @@ class Cache:
             _write_atomic(self.path(name, frame), lambda file, t=stream_table: np.save(file, t))
         _write_atomic(self.frame_path(frame), lambda file: np.save(file, table))
 
-    def read_frame(self, frame):
-        """name -> array for one frame, or CacheError naming the file."""
+    def read_frame(self, frame, reuse=False):
+        """name -> array for one frame, or CacheError naming the file. reuse: the arrays are
+        this Cache's own, the same ones each time and overwritten by the next such read (for
+        playback, which hands them to Blender at once: nothing allocated per frame)."""
         path = self.frame_path(frame)
         if not path.exists():
             raise CacheError(f"Frame {frame} is not in the cache ('{path}' is missing)")
-        return self.main.unpack(path, self._load(path, "frame"))
+        return self.main.read(path, "frame", self._buffers.setdefault(MAIN, {}) if reuse else None)
 
-    def read_stream(self, name, frame):
-        """name -> array of one stream for one frame, or CacheError naming the file."""
+    def read_stream(self, name, frame, reuse=False):
+        """name -> array of one stream for one frame, or CacheError naming the file (reuse:
+        as read_frame)."""
         path = self.path(name, frame)
-        return self.streams[name].unpack(path, self._load(path, f"{name} frame"))
+        return self.streams[name].read(path, f"{name} frame",
+                                       self._buffers.setdefault(name, {}) if reuse else None)

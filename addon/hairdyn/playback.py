@@ -101,8 +101,11 @@ def _read_checked(cache, name, frame):
     path = cache.path(name, frame)
     if path.exists() and not path.is_file():
         raise CacheError(f"The baked frame '{path}' is not a file: bake again")
-    # The reader refuses a torn, garbled or non-finite frame (cache.py).
-    return cache.read_frame(frame) if name == MAIN else cache.read_stream(name, frame)
+    # The reader refuses a torn, garbled or non-finite frame (cache.py). The arrays are the
+    # cache's own buffers, reused frame after frame: outputs.write copies them into Blender.
+    if name == MAIN:
+        return cache.read_frame(frame, reuse=True)
+    return cache.read_stream(name, frame, reuse=True)
 
 
 def load_frame(obj, frame, depsgraph=None):
