@@ -269,7 +269,7 @@ template<typename T> void blur_axis(const Span<float> weights, const int64_t pla
 }  // namespace
 
 template<typename T>
-void blur_binomial(const ivec3 &size, const int radius, const MutableSpan<T> values,
+void blur_binomial(const ivec3 &size, const int radius, std::vector<T> &values,
                    std::vector<T> &scratch)
 {
   if (radius <= 0) {
@@ -281,21 +281,19 @@ void blur_binomial(const ivec3 &size, const int radius, const MutableSpan<T> val
     weights[size_t(k)] = float(binomial / std::pow(4.0, radius));
     binomial = binomial * double(2 * radius - k) / double(k + 1);
   }
-  scratch.resize(size_t(values.size()));
-  const MutableSpan<T> copy(scratch);
+  scratch.resize(values.size());
+  const MutableSpan<T> in(values), copy(scratch);
   const int64_t sx = size.x, sxy = int64_t(size.x) * size.y;
-  /* x into the scratch, y back, z into the scratch, which is copied back. */
-  blur_axis<T>(weights, int64_t(size.y) * size.z, sx, size.x, 1, 1, values, copy);
-  blur_axis<T>(weights, size.z, sxy, size.y, sx, sx, copy, values);
-  blur_axis<T>(weights, size.y, sx, size.z, sxy, sx, values, copy);
-  parallel_for(values.size(), grid_grain, [&](const IndexRange range) {
-    std::copy(&copy[range.start], &copy[range.start] + range.size, &values[range.start]);
-  });
+  /* x into the scratch, y back, z into the scratch, which then becomes the values. */
+  blur_axis<T>(weights, int64_t(size.y) * size.z, sx, size.x, 1, 1, in, copy);
+  blur_axis<T>(weights, size.z, sxy, size.y, sx, sx, copy, in);
+  blur_axis<T>(weights, size.y, sx, size.z, sxy, sx, in, copy);
+  std::swap(values, scratch);
 }
 
-template void blur_binomial<float>(const ivec3 &, int, MutableSpan<float>, std::vector<float> &);
-template void blur_binomial<vec3>(const ivec3 &, int, MutableSpan<vec3>, std::vector<vec3> &);
-template void blur_binomial<vec4>(const ivec3 &, int, MutableSpan<vec4>, std::vector<vec4> &);
+template void blur_binomial<float>(const ivec3 &, int, std::vector<float> &, std::vector<float> &);
+template void blur_binomial<vec3>(const ivec3 &, int, std::vector<vec3> &, std::vector<vec3> &);
+template void blur_binomial<vec4>(const ivec3 &, int, std::vector<vec4> &, std::vector<vec4> &);
 
 void copy_between_grids(const GridFrame &from, const Span<float> values, const GridFrame &to,
                         const MutableSpan<float> r_values)

@@ -279,9 +279,10 @@ template<typename T> T sample_grid(const GridFrame &grid, Span<T> values, const 
 }
 
 /* Separable binomial filter of radius r (weights C(2r, r + k) / 4^r along each axis, zero
- * outside the grid): symmetric, and it keeps the sum of values away from the border. */
+ * outside the grid): symmetric, and it keeps the sum of values away from the border. The
+ * result is left in `values` by swapping it with `scratch` (spans over either are stale). */
 template<typename T>
-void blur_binomial(const ivec3 &size, int radius, MutableSpan<T> values, std::vector<T> &scratch);
+void blur_binomial(const ivec3 &size, int radius, std::vector<T> &values, std::vector<T> &scratch);
 
 /* The values of grid `from` at the vertices of grid `to` (same cell size: the lattices
  * coincide), 0 where `from` has no vertex. */

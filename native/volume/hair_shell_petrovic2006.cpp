@@ -226,7 +226,7 @@ HairShell::HairShell(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
   density_.resize(size_t(grid_.vertices_num()));
   std::vector<float> scratch;
   splat_density(grid_, bins, density_, scratch);
-  blur_binomial(grid_.size, params.shell_blur, MutableSpan<float>(density_), scratch);
+  blur_binomial(grid_.size, params.shell_blur, density_, scratch);
   distance_.resize(density_.size());
   signed_distance_fast_sweeping(grid_.size, grid_.cell_size, density_, params.shell_threshold,
                                 distance_);

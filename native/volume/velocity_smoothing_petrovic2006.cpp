@@ -13,21 +13,21 @@ void smooth_grid_velocity(const GridFrame &grid, const PointBins &bins,
   const int64_t vertices_num = grid.vertices_num();
   grids.momentum_density.resize(size_t(vertices_num));
   grids.velocity.resize(size_t(vertices_num));
-  const MutableSpan<vec4> md(grids.momentum_density);
   /* §5.1: Σ w v and eq. 1's Σ w at each vertex, in one gather. */
   splat_to_grid<vec4>(
       grid, bins,
       [&](const int64_t i) {
         return vec4(velocities[i], 1.0f);
       },
-      md, grids.splat_scratch);
+      MutableSpan<vec4>(grids.momentum_density), grids.splat_scratch);
+  const Span<vec4> splat(grids.momentum_density);
   /* The largest of eq. 1's Σ w (a maximum: the same on any thread count). */
   grids.density_max = parallel_reduce(
       vertices_num, grid_grain, 0.0f,
       [&](const IndexRange range) {
         float m = 0.0f;
         for (int64_t v = range.start; v < range.one_after_last(); v++) {
-          m = std::max(m, md[v].w);
+          m = std::max(m, splat[v].w);
         }
         return m;
       },
@@ -35,7 +35,8 @@ void smooth_grid_velocity(const GridFrame &grid, const PointBins &bins,
         return std::max(a, b);
       });
   /* B M and B D. */
-  blur_binomial(grid.size, filter_radius, md, grids.scratch4);
+  blur_binomial(grid.size, filter_radius, grids.momentum_density, grids.scratch4);
+  const Span<vec4> md(grids.momentum_density);
   const MutableSpan<vec4> v_grid(grids.velocity);
   parallel_for(vertices_num, grid_grain, [&](const IndexRange range) {
     for (int64_t v = range.start; v < range.one_after_last(); v++) {
@@ -50,7 +51,7 @@ void smooth_grid_velocity(const GridFrame &grid, const PointBins &bins,
     }
   });
   /* B V. */
-  blur_binomial(grid.size, filter_radius, v_grid, grids.scratch4);
+  blur_binomial(grid.size, filter_radius, grids.velocity, grids.scratch4);
 }
 
 void drag_toward(const GridFrame &grid, const PointBins &bins, const VelocityGrids &grids,
