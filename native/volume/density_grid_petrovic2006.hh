@@ -234,14 +234,19 @@ inline Lanes4 sample_cell_lanes(const GridFrame &grid, const Span<vec4> values,
 {
   const int64_t dy = grid.size.x, dz = int64_t(grid.size.x) * grid.size.y;
   const vec4 *v = values.data() + vertex;
-  const float wx[2] = { 1.0f - f.x, f.x }, wy[2] = { 1.0f - f.y, f.y },
-              wz[2] = { 1.0f - f.z, f.z };
-  const float wxy[4] = { wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1] };
+  /* The eight corner weights wx·wy·wz in two registers: the same products as sample_cell. */
+  const float gx = 1.0f - f.x, gy = 1.0f - f.y;
+  const Lanes4 wxy = Lanes4::set(gx, f.x, gx, f.x) * Lanes4::set(gy, gy, f.y, f.y);
+  const Lanes4 w0 = wxy * Lanes4::splat(1.0f - f.z), w1 = wxy * Lanes4::splat(f.z);
   Lanes4 sum = Lanes4::zero();
-  for (int c = 0; c < 8; c++) {
-    const int x = c & 1, y = (c >> 1) & 1, z = c >> 2;
-    sum = sum + Lanes4::splat(wxy[c & 3] * wz[z]) * Lanes4::load(v[x + y * dy + z * dz]);
-  }
+  sum = sum + w0.broadcast<0>() * Lanes4::load(v[0]);
+  sum = sum + w0.broadcast<1>() * Lanes4::load(v[1]);
+  sum = sum + w0.broadcast<2>() * Lanes4::load(v[dy]);
+  sum = sum + w0.broadcast<3>() * Lanes4::load(v[dy + 1]);
+  sum = sum + w1.broadcast<0>() * Lanes4::load(v[dz]);
+  sum = sum + w1.broadcast<1>() * Lanes4::load(v[dz + 1]);
+  sum = sum + w1.broadcast<2>() * Lanes4::load(v[dz + dy]);
+  sum = sum + w1.broadcast<3>() * Lanes4::load(v[dz + dy + 1]);
   return sum;
 }
 

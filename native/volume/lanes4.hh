@@ -54,6 +54,11 @@ struct Lanes4 {
   {
     return { _mm_div_ps(a.v, b.v) };
   }
+  /* Lane i in all four lanes. */
+  template<int i> Lanes4 broadcast() const
+  {
+    return { _mm_shuffle_ps(v, v, _MM_SHUFFLE(i, i, i, i)) };
+  }
 #else
   float v[4];
 
@@ -94,6 +99,10 @@ struct Lanes4 {
   friend Lanes4 operator/(const Lanes4 a, const Lanes4 b)
   {
     return { { a.v[0] / b.v[0], a.v[1] / b.v[1], a.v[2] / b.v[2], a.v[3] / b.v[3] } };
+  }
+  template<int i> Lanes4 broadcast() const
+  {
+    return splat(v[i]);
   }
 #endif
   static Lanes4 load(const vec4 &p)
