@@ -1,17 +1,20 @@
 """Owns: baking: where an object's bake lives (the folder name recorded when it was first
 baked, so a renamed object keeps it), starting a bake or resuming one into a Cache, and
-finishing it (its report in the manifest). The frames are simulated by simulation.Runner.
+finishing it (its report in the manifest), and a snapshot of a baked frame as a Curves object.
+The frames are simulated by simulation.Runner.
 """
 
 from pathlib import Path
 
 import bpy
 
-from . import frame_record, properties
+import numpy as np
+
+from . import bridge, frame_record, properties
 from .cache import Cache
 from .errors import HairdynError
 from .outputs import STRANDS
-from .simulation import Runner
+from .simulation import Runner, frame_set, head_object
 
 
 def folder_name(hair_obj):
@@ -129,3 +132,28 @@ def finish_bake(runner):
     }
     runner.cache.save_manifest()
     return report
+
+
+def snapshot_frame(context, hair_obj, frame, name):
+    """A Curves object `name` (made, or updated when it exists with the groom's topology) with
+    the shape of `frame` of the hair object's bake, placed where the head at the first frame to
+    simulate carries it: what reads a shape with that frame's head (the volume's target) finds
+    the baked frame's shape on the head. Returns it."""
+    cache = Cache.open(cache_directory(hair_obj))
+    positions = np.asarray(cache.read_frame(frame)["position"], dtype=np.float64)
+    offsets = cache.curve_offsets()
+    scene = context.scene
+    head = head_object(hair_obj)
+    current = scene.frame_current
+    try:
+        matrices = []
+        for at in (frame, hair_obj.hairdyn.frame_start):
+            frame_set(scene, at)
+            matrices.append(bridge.object_matrix(head, context.evaluated_depsgraph_get()))
+    finally:
+        frame_set(scene, current)
+    to_start = matrices[1] @ np.linalg.inv(matrices[0])
+    placed = positions @ to_start[:3, :3].T + to_start[:3, 3]
+    snapshot = bridge.ensure_curves_output(bpy.data.objects.get(name), name, offsets, like=hair_obj)
+    bridge.write_curves(snapshot, placed.astype(np.float32))
+    return snapshot

@@ -199,9 +199,13 @@ class HAIRDYN_OT_target_from_bake(bpy.types.Operator):
 
     @operator_boundary
     def execute(self, context):
-        from .methods import volume
+        from . import bake
 
-        target = volume.target_from_bake(context, context.object, self.frame)
+        obj = context.object
+        # A snapshot, so the target stays when the bake is redone; hidden in renders.
+        target = bake.snapshot_frame(context, obj, self.frame, f"{obj.name} target {self.frame}")
+        target.hide_render = True
+        obj.hairdyn.volume_options.target = target
         self.report({'INFO'}, f"Target: '{target.name}', frame {self.frame} of the bake")
         return {'FINISHED'}
 

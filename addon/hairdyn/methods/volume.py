@@ -160,37 +160,6 @@ def show_grid_sequence(hair_obj, first_path, first, last):
     volume.grids.load()
 
 
-def target_from_bake(context, hair_obj, frame):
-    """Makes the shape of `frame` of the hair object's bake its target (§5.2): a Curves object
-    '<hair> target <frame>' (hidden in renders), placed where the head at the first frame to
-    simulate carries it, since the pass reads the target with that frame's head. A snapshot, so
-    the target stays when the bake is redone. Returns the object."""
-    from .. import bake, bridge, simulation
-    from ..cache import Cache
-
-    cache = Cache.open(bake.cache_directory(hair_obj))
-    positions = np.asarray(cache.read_frame(frame)["position"], dtype=np.float64)
-    offsets = cache.curve_offsets()
-    settings, scene = hair_obj.hairdyn, context.scene
-    head = simulation.head_object(hair_obj)
-    current = scene.frame_current
-    try:
-        matrices = []
-        for at in (frame, settings.frame_start):
-            simulation.frame_set(scene, at)
-            matrices.append(bridge.object_matrix(head, context.evaluated_depsgraph_get()))
-    finally:
-        simulation.frame_set(scene, current)
-    to_start = matrices[1] @ np.linalg.inv(matrices[0])
-    placed = positions @ to_start[:3, :3].T + to_start[:3, 3]
-    name = f"{hair_obj.name} target {frame}"
-    target = bridge.ensure_curves_output(bpy.data.objects.get(name), name, offsets, like=hair_obj)
-    bridge.write_curves(target, placed.astype(np.float32))
-    target.hide_render = True
-    settings.volume_options.target = target
-    return target
-
-
 def attach(solver, build):
     options = build.settings.volume_options
     if not (
