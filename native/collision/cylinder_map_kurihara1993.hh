@@ -62,6 +62,10 @@ class CylinderMap {
       b.defined[k] = (y >= y_min ? 1 : 0) & (y <= y_max ? 1 : 0) &
                      (inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1);
     }
+    bool compacted = false;
+    if constexpr (inside_only && N > 1) {
+      compacted = compact_defined<false>(b);
+    }
     for (int64_t k = 0; k < b.size; k++) {
       b.u[k] = fast_atan2(b.z[k], b.x[k]) * u_per_radian;
     }
@@ -86,6 +90,9 @@ class CylinderMap {
       const float radial_x = off_axis ? rx : 1.0f;
       const float radial_z = off_axis ? rz : 0.0f;
       set_depth(b, k, radial_x * r_q, b.y[k], radial_z * r_q);
+    }
+    if (compacted) {
+      expand_defined(b);
     }
   }
 

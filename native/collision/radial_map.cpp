@@ -194,7 +194,102 @@ __attribute__((target("avx2"))) inline __m256 load_two_cells(const float *cells,
                               _mm_loadu_ps(cells + hi), 1);
 }
 
+/* For each mask of 8 lanes, the lanes set, first (the permutation that packs them to the
+ * front), and how many there are. */
+struct LeftPack {
+  alignas(32) int32_t lanes[256][8];
+  /* The inverse: for each lane set, its rank among them (0 for the others). */
+  alignas(32) int32_t ranks[256][8];
+  int32_t count[256];
+  LeftPack()
+  {
+    for (int mask = 0; mask < 256; mask++) {
+      int n = 0;
+      for (int lane = 0; lane < 8; lane++) {
+        ranks[mask][lane] = 0;
+        if (mask & (1 << lane)) {
+          ranks[mask][lane] = n;
+          lanes[mask][n++] = lane;
+        }
+      }
+      count[mask] = n;
+      while (n < 8) {
+        lanes[mask][n++] = 0;
+      }
+    }
+  }
+};
+const LeftPack left_pack;
+
+__attribute__((target("avx2"))) inline void pack_floats(float *values, const int64_t n,
+                                                        const int64_t k, const __m256i lanes)
+{
+  _mm256_storeu_ps(values + n, _mm256_permutevar8x32_ps(_mm256_loadu_ps(values + k), lanes));
+}
+
 }  // namespace
+
+__attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_size> &b,
+                                                          const bool carry_v, int64_t &r_n,
+                                                          int64_t &r_k)
+{
+  int64_t n = r_n, k = r_k;
+  const __m256i zero = _mm256_setzero_si256();
+  for (; k + 8 <= b.size; k += 8) {
+    /* Loads before stores: slots n .. n + 7 (n <= k) may overlap points k .. k + 7. */
+    const __m256i defined =
+        _mm256_loadu_si256(reinterpret_cast<const __m256i *>(b.defined + k));
+    const int mask = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(defined, zero)));
+    const __m256i lanes =
+        _mm256_load_si256(reinterpret_cast<const __m256i *>(left_pack.lanes[mask]));
+    const __m256i index = _mm256_add_epi32(_mm256_set1_epi32(int32_t(k)),
+                                           _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    _mm256_storeu_si256(reinterpret_cast<__m256i *>(b.index + n),
+                        _mm256_permutevar8x32_epi32(index, lanes));
+    pack_floats(b.x, n, k, lanes);
+    pack_floats(b.y, n, k, lanes);
+    pack_floats(b.z, n, k, lanes);
+    pack_floats(b.r_p, n, k, lanes);
+    if (carry_v) {
+      pack_floats(b.v, n, k, lanes);
+    }
+    b.group_masks[k / 8] = uint8_t(mask);
+    n += left_pack.count[mask];
+  }
+  b.packed_points = k;
+  b.packed_slots = n;
+  r_n = n;
+  r_k = k;
+}
+
+__attribute__((target("avx2"))) void expand_defined_avx2(MapBatch<map_batch_size> &b)
+{
+  /* Backward, group by group: group g's slots start at n, after the slots of the groups
+   * below it, and n <= k: its stores (points k .. k + 7) reach no slot still to be read. */
+  int64_t n = b.packed_slots;
+  const __m256i lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256i one = _mm256_set1_epi32(1);
+  for (int64_t k = b.packed_points - 8; k >= 0; k -= 8) {
+    const int mask = b.group_masks[k / 8];
+    n -= left_pack.count[mask];
+    const __m256i ranks =
+        _mm256_load_si256(reinterpret_cast<const __m256i *>(left_pack.ranks[mask]));
+    const __m256i kept = _mm256_cmpeq_epi32(
+        _mm256_and_si256(_mm256_set1_epi32(mask), lane_bits), lane_bits);
+    /* valid | inside << 1, as expand_defined keeps them in c00. */
+    const __m256i codes = _mm256_permutevar8x32_epi32(
+        _mm256_loadu_si256(reinterpret_cast<const __m256i *>(b.c00 + n)), ranks);
+    _mm256_storeu_si256(reinterpret_cast<__m256i *>(b.valid + k),
+                        _mm256_and_si256(_mm256_and_si256(codes, one), kept));
+    _mm256_storeu_si256(reinterpret_cast<__m256i *>(b.inside + k),
+                        _mm256_and_si256(_mm256_srli_epi32(codes, 1), kept));
+    /* The other points' values are not valid: whatever lands there is never read. */
+    for (float *values : { b.depth, b.nx, b.ny, b.nz, b.x, b.y, b.z }) {
+      _mm256_storeu_ps(values + k,
+                       _mm256_permutevar8x32_ps(_mm256_loadu_ps(values + n), ranks));
+    }
+  }
+}
 
 __attribute__((target("avx2"))) int64_t RadialTable::blend_avx2(
     MapBatch<map_batch_size> &b) const

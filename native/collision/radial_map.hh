@@ -88,7 +88,109 @@ template<int64_t N> struct MapBatch {
   float w00[N], w10[N], w01[N], w11[N];
   /* Blend with AVX2 (RadialTable::blend_avx2): set by the caller when the CPU has it. */
   bool avx2 = false;
+  /* While compacted (compact_defined): the batch's size before, and where each point was;
+   * with AVX2, which of each group of eight points were kept, for how many points and slots
+   * (compact_defined_avx2). */
+  int64_t full_size = 0;
+  int32_t index[N];
+  uint8_t group_masks[N / 8 + 1];
+  int64_t packed_points = 0, packed_slots = 0;
 };
+
+#if defined(HAIRDYN_BLEND_AVX2)
+/* compact_defined's loop eight points at a time (left-packed by a permutation), from point
+ * r_k and slot r_n on: advances both past the last whole group of eight. */
+__attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_size> &b,
+                                                          bool carry_v, int64_t &r_n,
+                                                          int64_t &r_k);
+/* expand_defined's loop for the groups compact_defined_avx2 packed. */
+__attribute__((target("avx2"))) void expand_defined_avx2(MapBatch<map_batch_size> &b);
+#endif
+
+/* A batch in which few points can be inside (the others are beyond the map's largest radius
+ * or outside its height range: the shell of a query around a collider, most of a groom) looks
+ * up only those. compact_defined moves them to the front of the batch (x, y, z, r_p and, with
+ * carry_v, v), the stages run on them alone, and expand_defined moves their results back
+ * (valid, inside, depth, N, and x, y, z); the other points are left not valid. A point's
+ * operations are the same either way, only which lane runs them changes. Returns false (and
+ * leaves the batch as it is) when more than 3/4 of the points are defined. */
+template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
+{
+  int32_t defined_num = 0;
+  for (int64_t k = 0; k < b.size; k++) {
+    defined_num += b.defined[k];
+  }
+  if (4 * int64_t(defined_num) > 3 * b.size) {
+    return false;
+  }
+  /* Forward, in place: slot n <= k has been read by the time it is written. Branch-free:
+   * every point is written, and n moves on only past a defined one. */
+  int64_t n = 0, k = 0;
+#if defined(HAIRDYN_BLEND_AVX2)
+  if constexpr (N == map_batch_size) {
+    if (b.avx2) {
+      compact_defined_avx2(b, carry_v, n, k);
+    }
+  }
+#endif
+  for (; k < b.size; k++) {
+    b.index[n] = int32_t(k);
+    b.x[n] = b.x[k];
+    b.y[n] = b.y[k];
+    b.z[n] = b.z[k];
+    b.r_p[n] = b.r_p[k];
+    if constexpr (carry_v) {
+      b.v[n] = b.v[k];
+    }
+    n += b.defined[k];
+  }
+  b.full_size = b.size;
+  b.size = n;
+  for (int64_t j = 0; j < n; j++) {
+    b.defined[j] = 1;
+  }
+  return true;
+}
+
+template<int64_t N> HAIRDYN_BATCH_INLINE void expand_defined(MapBatch<N> &b)
+{
+  const int64_t n = b.size;
+  /* valid and inside kept aside (in c00, read by no later stage), then cleared everywhere. */
+  for (int64_t j = 0; j < n; j++) {
+    b.c00[j] = uint32_t(b.valid[j] | (b.inside[j] << 1));
+  }
+  for (int64_t k = 0; k < b.full_size; k++) {
+    b.valid[k] = 0;
+    b.inside[k] = 0;
+  }
+  /* Backward, in place: index[j] >= j, and the slots below j are still to be read. */
+  int64_t j_end = 0;
+#if defined(HAIRDYN_BLEND_AVX2)
+  if constexpr (N == map_batch_size) {
+    j_end = b.avx2 ? b.packed_slots : 0;
+  }
+#endif
+  for (int64_t j = n - 1; j >= j_end; j--) {
+    const int64_t k = b.index[j];
+    b.valid[k] = int32_t(b.c00[j] & 1u);
+    b.inside[k] = int32_t(b.c00[j] >> 1);
+    b.depth[k] = b.depth[j];
+    b.nx[k] = b.nx[j];
+    b.ny[k] = b.ny[j];
+    b.nz[k] = b.nz[j];
+    b.x[k] = b.x[j];
+    b.y[k] = b.y[j];
+    b.z[k] = b.z[j];
+  }
+#if defined(HAIRDYN_BLEND_AVX2)
+  if constexpr (N == map_batch_size) {
+    if (b.avx2) {
+      expand_defined_avx2(b);
+    }
+  }
+#endif
+  b.size = b.full_size;
+}
 
 /* x clamped to [lo, hi], NaN to lo: both comparisons are false for NaN, so no input can give
  * a value outside the range (and a cell index cast from it stays inside the table). */

@@ -60,6 +60,10 @@ class SphereMap {
       b.defined[k] = inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1;
       b.v[k] = std::sqrt(rho_xz_sq);
     }
+    bool compacted = false;
+    if constexpr (inside_only && N > 1) {
+      compacted = compact_defined<true>(b);
+    }
     /* θ around the pole axis, φ from it. */
     for (int64_t k = 0; k < b.size; k++) {
       const float v = fast_atan2(b.v[k], b.y[k]) * v_per_radian - 0.5f;
@@ -94,6 +98,9 @@ class SphereMap {
       const float dy = off_centre ? uy : 1.0f;
       const float dz = off_centre ? uz : 0.0f;
       set_depth(b, k, dx * b.r_q[k], dy * b.r_q[k], dz * b.r_q[k]);
+    }
+    if (compacted) {
+      expand_defined(b);
     }
   }
 
