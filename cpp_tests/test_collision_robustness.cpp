@@ -6,6 +6,7 @@
  * the same bits as the per-point query. */
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -271,4 +272,82 @@ TEST(CollisionRobustness, PenetrationReportsRootsInsideApart)
   EXPECT_NEAR(apart.max_depth, 0.05f, 0.03f);
   EXPECT_LT(apart.max_depth, apart.roots_depth_max);
   EXPECT_FLOAT_EQ(apart.share, 0.25f);
+}
+
+TEST(CollisionRobustness, BatchedQueryHasTheSameBitsWithAndWithoutAvx2)
+{
+  /* find_contacts' AVX2 code (8 lanes, RadialTable::blend_avx2) against the baseline code
+   * (SSE2, 4 lanes) on this CPU, bit for bit: both map kinds, a similarity placement and a
+   * sheared one, two parts of one collider, points near the poles, the wrap of the azimuth and
+   * the ends of the height range, hostile points, and a partial last batch. */
+  if (!collision_avx2_available()) {
+    GTEST_SKIP() << "the CPU has no AVX2";
+  }
+  std::mt19937 rng(5);
+  std::normal_distribution<float> gauss;
+  std::uniform_real_distribution<float> radius(0.0f, 1.3f);
+  std::vector<vec3> points(2 * 4096 + 777);
+  for (vec3 &p : points) {
+    p = glm::normalize(vec3(gauss(rng), gauss(rng), gauss(rng))) * radius(rng);
+  }
+  for (int k = 0; k < 200; k++) {
+    /* Near the poles (φ within half a row) and near θ = 0 from both sides (the wrap). */
+    const float r = 0.5f + 0.005f * float(k);
+    points.emplace_back(1e-3f * gauss(rng), r, 1e-3f * gauss(rng));
+    points.emplace_back(1e-3f * gauss(rng), -r, 1e-3f * gauss(rng));
+    points.emplace_back(r, 0.01f * gauss(rng), 1e-4f * gauss(rng));
+  }
+  const std::vector<vec3> hostile = hostile_points(1.0f);
+  points.insert(points.end(), hostile.begin(), hostile.end());
+  mat4 shear(1.0f);
+  shear[1][0] = 0.3f;
+  const mat4 similarity =
+      glm::scale(glm::rotate(glm::translate(mat4(1.0f), vec3(0.1f, -0.2f, 0.05f)), 0.7f,
+                             glm::normalize(vec3(1, 2, 3))),
+                 vec3(1.2f));
+  const TestMesh capsule = closed_cylinder(0.6f, 1.6f, 20, 8);
+  std::vector<int32_t> part_vertices, part_offsets = { 0 };
+  for (const float y_cut : { -0.1f, 0.1f }) {
+    /* Two overlapping parts: below y = 0.1 and above y = -0.1. */
+    for (int32_t v = 0; v < int32_t(capsule.vertices.size()); v++) {
+      const float y = capsule.vertices[size_t(v)].y;
+      if (y_cut > 0.0f ? y <= y_cut : y >= y_cut) {
+        part_vertices.push_back(v);
+      }
+    }
+    part_offsets.push_back(int32_t(part_vertices.size()));
+  }
+  const bool avx2_was_used = collision_avx2_used();
+  for (const MapKind kind : { MapKind::Cylinder, MapKind::Sphere }) {
+    for (const mat4 &m : { similarity, shear }) {
+      CollisionParams params;
+      params.map_kind = kind;
+      const auto parts = std::make_shared<Collider>(
+          ColliderMesh(capsule.vertices, capsule.triangles), part_offsets, part_vertices, params);
+      const auto sphere = sphere_collider(kind, 0.9f);
+      parts->set_transform(m);
+      sphere->set_transform(glm::translate(mat4(1.0f), vec3(0.2f, 0.1f, 0.0f)));
+      ColliderSet set;
+      set.add(sphere);
+      set.add(parts);
+      const size_t n = points.size();
+      std::vector<uint8_t> hit[2] = { std::vector<uint8_t>(n), std::vector<uint8_t>(n) };
+      std::vector<float> depth[2] = { std::vector<float>(n), std::vector<float>(n) };
+      std::vector<vec3> normal[2] = { std::vector<vec3>(n), std::vector<vec3>(n) };
+      std::vector<vec3> surface[2] = { std::vector<vec3>(n), std::vector<vec3>(n) };
+      for (const int avx2 : { 0, 1 }) {
+        set_collision_avx2(avx2 != 0);
+        EXPECT_EQ(collision_avx2_used(), avx2 != 0);
+        find_contacts(set, points, hit[avx2], depth[avx2], normal[avx2], surface[avx2]);
+      }
+      set_collision_avx2(avx2_was_used);
+      EXPECT_EQ(hit[0], hit[1]);
+      EXPECT_EQ(std::memcmp(depth[0].data(), depth[1].data(), n * sizeof(float)), 0);
+      EXPECT_EQ(std::memcmp(normal[0].data(), normal[1].data(), n * sizeof(vec3)), 0);
+      EXPECT_EQ(std::memcmp(surface[0].data(), surface[1].data(), n * sizeof(vec3)), 0);
+      const int64_t hits = std::count(hit[0].begin(), hit[0].end(), uint8_t(1));
+      EXPECT_GT(hits, int64_t(n / 4));
+      EXPECT_LT(hits, int64_t(n));
+    }
+  }
 }

@@ -3,7 +3,8 @@
  * BM_FindContact/<triangles>: ColliderSet::find_contact per point on one core, for a UV sphere
  * of about 1,000 and 1,000,000 triangles, queried at points in a shell around the surface
  * (half inside: every query takes the full look-up path). items/s = queries per second.
- * BM_FindContactsBatch/<triangles>/<threads>: the parallel span kernel.
+ * BM_FindContactsBatch/<triangles>/<threads>: the parallel span kernel (avx2 = 1 where it runs
+ * its AVX2 code).
  * BM_BuildCollider/<triangles>: what a deforming collider pays per frame (BVH, maps with the
  * automatic choice, exact distance).
  * BM_PenetrationStats/<triangles>: the report's exact penetration check (a BVH closest point
@@ -87,9 +88,15 @@ static void BM_FindContactsBatch(benchmark::State &state)
     benchmark::DoNotOptimize(depth.data());
   }
   state.SetItemsProcessed(state.iterations() * int64_t(points.size()));
+  state.counters["avx2"] = collision_avx2_used() ? 1.0 : 0.0;
   set_thread_num(0);
 }
-BENCHMARK(BM_FindContactsBatch)->Args({1000, 1})->Args({1000000, 1})->Args({1000000, 2})->UseRealTime();
+BENCHMARK(BM_FindContactsBatch)
+    ->Args({1000, 1})
+    ->Args({1000, 2})
+    ->Args({1000000, 1})
+    ->Args({1000000, 2})
+    ->UseRealTime();
 
 static void BM_PenetrationStats(benchmark::State &state)
 {

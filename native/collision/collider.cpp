@@ -1,9 +1,15 @@
 #include "collision/collider.hh"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <sstream>
+#include <tuple>
+
+#if defined(HAIRDYN_BLEND_AVX2)
+#include <immintrin.h>
+#endif
 
 #include "core/parallel.hh"
 
@@ -291,35 +297,201 @@ PenetrationStats ColliderSet::penetration_stats(const Span<vec3> points_wo,
   return stats;
 }
 
-/* One batch of the parallel query, compiled twice (chosen when the module loads): for AVX2
- * (8 lanes; the cells' blend is 4 lanes in both) and for the x86-64 baseline (SSE2, 4 lanes).
- * The same IEEE operations in the same order (no FMA: -std=c++17 leaves contraction off), so
- * both give the same bits. */
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-static void
-find_contacts_batch(const ColliderSet &colliders, ContactBatch<map_batch_size> &contacts,
-                    MapBatch<map_batch_size> &scratch)
+namespace {
+
+/* Whether the CPU has AVX2, asked once. */
+bool cpu_has_avx2()
 {
-  colliders.accumulate_contacts(contacts, scratch);
+#if defined(HAIRDYN_BLEND_AVX2)
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+std::atomic<bool> use_avx2{ cpu_has_avx2() };
+
+using OutputSpans = std::tuple<MutableSpan<uint8_t>, MutableSpan<float>, MutableSpan<vec3>,
+                               MutableSpan<vec3>>;
+
+#if defined(HAIRDYN_BLEND_AVX2)
+/* ContactBatch::load eight points at a time: load_xyz4's shuffles on two groups of four points
+ * at once (points k .. k + 3 in the low halves, k + 4 .. k + 7 in the high halves). */
+__attribute__((target("avx2"))) void load_avx2(ContactBatch<map_batch_size> &contacts,
+                                               const Span<vec3> points_wo)
+{
+  contacts.size = points_wo.size();
+  contacts.fresh = true;
+  const int64_t size = contacts.size;
+  int64_t k = 0;
+  for (; k + 8 <= size; k += 8) {
+    const float *f = &points_wo[k].x;
+    const __m256 a = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(f)),
+                                          _mm_loadu_ps(f + 12), 1);
+    const __m256 b = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(f + 4)),
+                                          _mm_loadu_ps(f + 16), 1);
+    const __m256 c = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(f + 8)),
+                                          _mm_loadu_ps(f + 20), 1);
+    const __m256 x2y2z2x3 = _mm256_shuffle_ps(b, c, _MM_SHUFFLE(1, 0, 3, 2));
+    _mm256_storeu_ps(contacts.px + k, _mm256_shuffle_ps(a, x2y2z2x3, _MM_SHUFFLE(3, 0, 3, 0)));
+    const __m256 y0y1 = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(0, 0, 1, 1));
+    const __m256 y2y3 = _mm256_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3));
+    _mm256_storeu_ps(contacts.py + k, _mm256_shuffle_ps(y0y1, y2y3, _MM_SHUFFLE(2, 0, 2, 0)));
+    const __m256 z0z1 = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2));
+    const __m256 z2z3 = _mm256_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0));
+    _mm256_storeu_ps(contacts.pz + k, _mm256_shuffle_ps(z0z1, z2z3, _MM_SHUFFLE(2, 0, 2, 0)));
+  }
+  for (; k < size; k++) {
+    contacts.px[k] = points_wo[k].x;
+    contacts.py[k] = points_wo[k].y;
+    contacts.pz[k] = points_wo[k].z;
+  }
+}
+
+/* store_xyz4 on two groups of four points at once (as load_avx2). */
+__attribute__((target("avx2"))) inline void store_xyz8(vec3 *p, const __m256 x, const __m256 y,
+                                                       const __m256 z)
+{
+  float *f = &p->x;
+  const __m256 xy01 = _mm256_unpacklo_ps(x, y), xy23 = _mm256_unpackhi_ps(x, y);
+  const __m256 z0x1 = _mm256_shuffle_ps(z, xy01, _MM_SHUFFLE(2, 2, 0, 0));
+  const __m256 a = _mm256_shuffle_ps(xy01, z0x1, _MM_SHUFFLE(2, 0, 1, 0));
+  const __m256 y1z1 = _mm256_shuffle_ps(xy01, z, _MM_SHUFFLE(1, 1, 3, 3));
+  const __m256 b = _mm256_shuffle_ps(y1z1, xy23, _MM_SHUFFLE(1, 0, 2, 0));
+  const __m256 z2x3 = _mm256_shuffle_ps(z, xy23, _MM_SHUFFLE(2, 2, 2, 2));
+  const __m256 y3z3 = _mm256_shuffle_ps(xy23, z, _MM_SHUFFLE(3, 3, 3, 3));
+  const __m256 c = _mm256_shuffle_ps(z2x3, y3z3, _MM_SHUFFLE(2, 0, 2, 0));
+  _mm_storeu_ps(f, _mm256_castps256_ps128(a));
+  _mm_storeu_ps(f + 4, _mm256_castps256_ps128(b));
+  _mm_storeu_ps(f + 8, _mm256_castps256_ps128(c));
+  _mm_storeu_ps(f + 12, _mm256_extractf128_ps(a, 1));
+  _mm_storeu_ps(f + 16, _mm256_extractf128_ps(b, 1));
+  _mm_storeu_ps(f + 20, _mm256_extractf128_ps(c, 1));
+}
+
+/* ContactBatch::store eight points at a time. */
+__attribute__((target("avx2"))) void store_avx2(ContactBatch<map_batch_size> &contacts,
+                                                const int64_t start,
+                                                const MutableSpan<uint8_t> r_hit,
+                                                const MutableSpan<float> r_depth,
+                                                const MutableSpan<vec3> r_normal_wo,
+                                                const MutableSpan<vec3> r_surface_point_wo)
+{
+  contacts.set_untouched();
+  const int64_t size = contacts.size;
+  int64_t k = 0;
+  for (; k + 8 <= size; k += 8) {
+    const int64_t i = start + k;
+    /* hit is 0 or 1: eight bytes. */
+    const __m256i h = _mm256_loadu_si256(reinterpret_cast<const __m256i *>(contacts.hit + k));
+    const __m128i h16 = _mm_packs_epi32(_mm256_castsi256_si128(h), _mm256_extracti128_si256(h, 1));
+    _mm_storel_epi64(reinterpret_cast<__m128i *>(r_hit.data() + i), _mm_packus_epi16(h16, h16));
+    _mm256_storeu_ps(r_depth.data() + i, _mm256_loadu_ps(contacts.depth + k));
+    store_xyz8(r_normal_wo.data() + i, _mm256_loadu_ps(contacts.nx + k),
+               _mm256_loadu_ps(contacts.ny + k), _mm256_loadu_ps(contacts.nz + k));
+    store_xyz8(r_surface_point_wo.data() + i, _mm256_loadu_ps(contacts.sx + k),
+               _mm256_loadu_ps(contacts.sy + k), _mm256_loadu_ps(contacts.sz + k));
+  }
+  for (; k < size; k++) {
+    const int64_t i = start + k;
+    r_hit[i] = uint8_t(contacts.hit[k]);
+    r_depth[i] = contacts.depth[k];
+    r_normal_wo[i] = vec3(contacts.nx[k], contacts.ny[k], contacts.nz[k]);
+    r_surface_point_wo[i] = vec3(contacts.sx[k], contacts.sy[k], contacts.sz[k]);
+  }
+}
+#endif
+
+/* The batches of one range of the parallel query: load, every collider, store. */
+template<bool avx2> HAIRDYN_BATCH_INLINE void find_contacts_range(
+    const ColliderSet &colliders, const Span<vec3> points_wo, const IndexRange range,
+    ContactBatch<map_batch_size> &contacts, MapBatch<map_batch_size> &scratch,
+    const OutputSpans &outputs)
+{
+  scratch.avx2 = avx2;
+  for (int64_t start = range.start; start < range.one_after_last(); start += map_batch_size) {
+    const int64_t size = std::min(map_batch_size, range.one_after_last() - start);
+#if defined(HAIRDYN_BLEND_AVX2)
+    if constexpr (avx2) {
+      load_avx2(contacts, points_wo.slice(start, size));
+    }
+    else
+#endif
+    {
+      contacts.load(points_wo.slice(start, size));
+    }
+    colliders.accumulate_contacts(contacts, scratch);
+    /* A point inside nothing: depth 0, normal 0, itself (ContactBatch::set_untouched). */
+#if defined(HAIRDYN_BLEND_AVX2)
+    if constexpr (avx2) {
+      store_avx2(contacts, start, std::get<0>(outputs), std::get<1>(outputs),
+                 std::get<2>(outputs), std::get<3>(outputs));
+      continue;
+    }
+#endif
+    contacts.store(start, std::get<0>(outputs), std::get<1>(outputs), std::get<2>(outputs),
+                   std::get<3>(outputs));
+  }
+}
+
+/* The range compiled twice: for AVX2 (8 lanes, and RadialTable::blend_avx2) and for the
+ * x86-64 baseline (SSE2, 4 lanes), chosen at run time by use_avx2. The same IEEE operations
+ * in the same order (no FMA: -std=c++17 leaves contraction off, and target("avx2") does not
+ * enable FMA), so both give the same bits; CollisionRobustness checks it. */
+#if defined(HAIRDYN_BLEND_AVX2)
+__attribute__((target("avx2"))) void find_contacts_range_avx2(
+    const ColliderSet &colliders, const Span<vec3> points_wo, const IndexRange range,
+    ContactBatch<map_batch_size> &contacts, MapBatch<map_batch_size> &scratch,
+    const OutputSpans &outputs)
+{
+  find_contacts_range<true>(colliders, points_wo, range, contacts, scratch, outputs);
+}
+#endif
+
+void find_contacts_range_baseline(const ColliderSet &colliders, const Span<vec3> points_wo,
+                                  const IndexRange range, ContactBatch<map_batch_size> &contacts,
+                                  MapBatch<map_batch_size> &scratch, const OutputSpans &outputs)
+{
+  find_contacts_range<false>(colliders, points_wo, range, contacts, scratch, outputs);
+}
+
+}  // namespace
+
+bool collision_avx2_available()
+{
+  return cpu_has_avx2();
+}
+
+void set_collision_avx2(const bool enabled)
+{
+  use_avx2 = enabled && cpu_has_avx2();
+}
+
+bool collision_avx2_used()
+{
+  return use_avx2;
 }
 
 void find_contacts(const ColliderSet &colliders, const Span<vec3> points_wo,
                    const MutableSpan<uint8_t> r_hit, const MutableSpan<float> r_depth,
                    const MutableSpan<vec3> r_normal_wo, const MutableSpan<vec3> r_surface_point_wo)
 {
+  const OutputSpans outputs{ r_hit, r_depth, r_normal_wo, r_surface_point_wo };
+  const bool avx2 = use_avx2;
   parallel_for(points_wo.size(), 4096, [&](const IndexRange range) {
-    /* About 60 KB of batch arrays: per thread, off the (small) worker stacks. */
-    auto contacts = std::make_unique<ContactBatch<map_batch_size>>();
-    auto scratch = std::make_unique<MapBatch<map_batch_size>>();
-    for (int64_t start = range.start; start < range.one_after_last(); start += map_batch_size) {
-      const int64_t size = std::min(map_batch_size, range.one_after_last() - start);
-      contacts->load(points_wo.slice(start, size));
-      find_contacts_batch(colliders, *contacts, *scratch);
-      /* A point inside nothing keeps what load() set: depth 0, normal 0, itself. */
-      contacts->store(start, r_hit, r_depth, r_normal_wo, r_surface_point_wo);
+    /* About 30 KB of batch arrays: per thread, off the (small) worker stacks; left
+     * uninitialised (every stage writes what the next reads). */
+    const std::unique_ptr<ContactBatch<map_batch_size>> contacts(
+        new ContactBatch<map_batch_size>);
+    const std::unique_ptr<MapBatch<map_batch_size>> scratch(new MapBatch<map_batch_size>);
+#if defined(HAIRDYN_BLEND_AVX2)
+    if (avx2) {
+      find_contacts_range_avx2(colliders, points_wo, range, *contacts, *scratch, outputs);
+      return;
     }
+#endif
+    find_contacts_range_baseline(colliders, points_wo, range, *contacts, *scratch, outputs);
   });
 }
 

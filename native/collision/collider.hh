@@ -108,11 +108,14 @@ HAIRDYN_BATCH_INLINE void store_xyz4(vec3 *p, const __m128 x, const __m128 y, co
  * MapBatch): hit, depth, normal n and surface point s, world space. */
 template<int64_t N> struct ContactBatch {
   int64_t size = 0;
+  /* No part has been looked up since load(): hit and the contact arrays are not set yet (the
+   * first part sets them without reading them; set_untouched sets them otherwise). */
+  bool fresh = false;
   float px[N], py[N], pz[N];
   int32_t hit[N];
   float depth[N], nx[N], ny[N], nz[N], sx[N], sy[N], sz[N];
 
-  void load(const Span<vec3> points_wo)
+  HAIRDYN_BATCH_INLINE void load(const Span<vec3> points_wo)
   {
     size = points_wo.size();
     int64_t k = 0;
@@ -130,7 +133,21 @@ template<int64_t N> struct ContactBatch {
       py[k] = points_wo[k].y;
       pz[k] = points_wo[k].z;
     }
-    for (k = 0; k < size; k++) {
+    fresh = true;
+    if constexpr (N == 1) {
+      /* A single point (the per-point calls) is set at once: as cheap, and plain to the
+       * compiler's uninitialised-use analysis. */
+      set_untouched();
+    }
+  }
+  /* Inside nothing yet: hit 0, depth 0, normal 0, the point itself. */
+  HAIRDYN_BATCH_INLINE void set_untouched()
+  {
+    if (!fresh) {
+      return;
+    }
+    fresh = false;
+    for (int64_t k = 0; k < size; k++) {
       hit[k] = 0;
       depth[k] = nx[k] = ny[k] = nz[k] = 0.0f;
       sx[k] = px[k];
@@ -139,10 +156,12 @@ template<int64_t N> struct ContactBatch {
     }
   }
   /* Writes the batch to the outputs of find_contacts, from index `start` on. */
-  void store(const int64_t start, const MutableSpan<uint8_t> r_hit,
-             const MutableSpan<float> r_depth, const MutableSpan<vec3> r_normal_wo,
-             const MutableSpan<vec3> r_surface_point_wo) const
+  HAIRDYN_BATCH_INLINE void store(const int64_t start, const MutableSpan<uint8_t> r_hit,
+                                  const MutableSpan<float> r_depth,
+                                  const MutableSpan<vec3> r_normal_wo,
+                                  const MutableSpan<vec3> r_surface_point_wo)
   {
+    set_untouched();
     int64_t k = 0;
 #if defined(__SSE2__)
     for (; N >= 4 && k + 4 <= size; k += 4) {
@@ -166,8 +185,9 @@ template<int64_t N> struct ContactBatch {
       r_surface_point_wo[i] = vec3(sx[k], sy[k], sz[k]);
     }
   }
-  bool read(const int64_t k, Contact &r_contact) const
+  bool read(const int64_t k, Contact &r_contact)
   {
+    set_untouched();
     if (!hit[k]) {
       return false;
     }
@@ -267,11 +287,21 @@ class Collider {
         }
       }
       /* Whether the transform is a similarity is resolved once per part, not per point. */
-      if (similarity_scale_ > 0.0f) {
-        take_contacts<true>(part, similarity_scale_, contacts, scratch);
+      if (contacts.fresh) {
+        /* The first part: no contact to compare with. */
+        contacts.fresh = false;
+        if (similarity_scale_ > 0.0f) {
+          take_contacts<true, true>(part, similarity_scale_, contacts, scratch);
+        }
+        else {
+          take_contacts<false, true>(part, similarity_scale_, contacts, scratch);
+        }
+      }
+      else if (similarity_scale_ > 0.0f) {
+        take_contacts<true, false>(part, similarity_scale_, contacts, scratch);
       }
       else {
-        take_contacts<false>(part, similarity_scale_, contacts, scratch);
+        take_contacts<false, false>(part, similarity_scale_, contacts, scratch);
       }
     }
   }
@@ -309,7 +339,9 @@ class Collider {
   /* T in world space for a part's map samples, and the deeper contacts taken. A similarity
    * (rotation, translation, uniform scale) keeps distances and normals up to the scale; other
    * affine maps need the lengths measured again. */
-  template<bool similarity, int64_t N> static HAIRDYN_BATCH_INLINE void take_contacts(
+  /* With first, the batch holds no contact yet (ContactBatch::fresh): the same values as
+   * comparing with set_untouched's, without reading them. */
+  template<bool similarity, bool first, int64_t N> static HAIRDYN_BATCH_INLINE void take_contacts(
       const Part &part, const float scale, ContactBatch<N> &contacts, const MapBatch<N> &scratch)
   {
     const int64_t size = contacts.size;
@@ -338,17 +370,31 @@ class Collider {
         const float n_length = std::sqrt(nx * nx + ny * ny + nz * nz);
         n_scale = 1.0f / (n_length > 0.0f ? n_length : 1.0f);
       }
-      const bool take =
-          (scratch.valid[k] != 0) & ((contacts.hit[k] == 0) | (depth_wo > contacts.depth[k]));
-      const int32_t mask = -int32_t(take);
-      contacts.hit[k] |= int32_t(take);
-      contacts.depth[k] = select_bits(mask, depth_wo, contacts.depth[k]);
-      contacts.nx[k] = select_bits(mask, nx * n_scale, contacts.nx[k]);
-      contacts.ny[k] = select_bits(mask, ny * n_scale, contacts.ny[k]);
-      contacts.nz[k] = select_bits(mask, nz * n_scale, contacts.nz[k]);
-      contacts.sx[k] = select_bits(mask, sx, contacts.sx[k]);
-      contacts.sy[k] = select_bits(mask, sy, contacts.sy[k]);
-      contacts.sz[k] = select_bits(mask, sz, contacts.sz[k]);
+      if constexpr (first) {
+        const int32_t take = scratch.valid[k] != 0 ? 1 : 0;
+        const int32_t mask = -take;
+        contacts.hit[k] = take;
+        contacts.depth[k] = select_bits(mask, depth_wo, 0.0f);
+        contacts.nx[k] = select_bits(mask, nx * n_scale, 0.0f);
+        contacts.ny[k] = select_bits(mask, ny * n_scale, 0.0f);
+        contacts.nz[k] = select_bits(mask, nz * n_scale, 0.0f);
+        contacts.sx[k] = select_bits(mask, sx, contacts.px[k]);
+        contacts.sy[k] = select_bits(mask, sy, contacts.py[k]);
+        contacts.sz[k] = select_bits(mask, sz, contacts.pz[k]);
+      }
+      else {
+        const bool take = (scratch.valid[k] != 0) &
+                          ((contacts.hit[k] == 0) | (depth_wo > contacts.depth[k]));
+        const int32_t mask = -int32_t(take);
+        contacts.hit[k] |= int32_t(take);
+        contacts.depth[k] = select_bits(mask, depth_wo, contacts.depth[k]);
+        contacts.nx[k] = select_bits(mask, nx * n_scale, contacts.nx[k]);
+        contacts.ny[k] = select_bits(mask, ny * n_scale, contacts.ny[k]);
+        contacts.nz[k] = select_bits(mask, nz * n_scale, contacts.nz[k]);
+        contacts.sx[k] = select_bits(mask, sx, contacts.sx[k]);
+        contacts.sy[k] = select_bits(mask, sy, contacts.sy[k]);
+        contacts.sz[k] = select_bits(mask, sz, contacts.sz[k]);
+      }
     }
   }
   void build_part(Part &part, bool choose_kind);
@@ -407,6 +453,13 @@ class ColliderSet {
  private:
   std::vector<std::shared_ptr<Collider>> colliders_;
 };
+
+/* Whether find_contacts runs its AVX2 code: by default where the CPU has AVX2. Turning it off
+ * runs the baseline (SSE2) code, for the test that both give the same bits; not to be changed
+ * while a query runs. */
+bool collision_avx2_available();
+void set_collision_avx2(bool enabled);
+bool collision_avx2_used();
 
 /* Contacts for many points: r_hit[i] = 1 and the contact where points_wo[i] is inside; 0, depth
  * 0, normal 0 and the point itself where it is not. */

@@ -41,7 +41,7 @@ CylinderMap::CylinderMap(const TriangleBVH &bvh, const Span<vec3> vertices,
       }
     }
   });
-  table_.update_max_radius();
+  table_.finish_build();
   max_radius_sq_ = table_.max_radius() * table_.max_radius();
 }
 

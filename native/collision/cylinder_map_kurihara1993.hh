@@ -52,6 +52,7 @@ class CylinderMap {
     const float y_min = y_min_, y_max = y_max_, max_radius_sq = max_radius_sq_;
     const RadialTable::Shape shape = table_.shape();
     const float u_per_radian = u_per_radian_, v_per_unit = v_per_unit_;
+    /* Short loops, one step each (see MapBatch). */
     for (int64_t k = 0; k < b.size; k++) {
       /* (r_p, θ_p, y_p) of P; outside the height range or beyond the largest radius P is
        * never inside. */
@@ -60,8 +61,16 @@ class CylinderMap {
       b.r_p[k] = std::sqrt(r_sq);
       b.defined[k] = (y >= y_min ? 1 : 0) & (y <= y_max ? 1 : 0) &
                      (inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1);
-      RadialTable::locate(shape, b, k, fast_atan2(z, x) * u_per_radian,
-                          (y - y_min) * v_per_unit - 0.5f);
+    }
+    bool compacted = false;
+    if constexpr (inside_only && N > 1) {
+      compacted = compact_defined<false>(b);
+    }
+    for (int64_t k = 0; k < b.size; k++) {
+      b.u[k] = fast_atan2(b.z[k], b.x[k]) * u_per_radian;
+    }
+    for (int64_t k = 0; k < b.size; k++) {
+      RadialTable::locate(shape, b, k, b.u[k], (b.y[k] - y_min) * v_per_unit - 0.5f);
     }
     if constexpr (N == 1) {
       /* A single point (the per-point calls) stops here when it cannot be inside. */
@@ -71,6 +80,7 @@ class CylinderMap {
       }
     }
     table_.blend(b);
+    normalise_normals<inside_only>(b);
     for (int64_t k = 0; k < b.size; k++) {
       /* Q: same azimuth and height as P, at radius r_q. */
       const float r_p = b.r_p[k], r_q = b.r_q[k];
@@ -79,7 +89,10 @@ class CylinderMap {
       const float rx = b.x[k] * inv_r, rz = b.z[k] * inv_r;
       const float radial_x = off_axis ? rx : 1.0f;
       const float radial_z = off_axis ? rz : 0.0f;
-      finish_lane<inside_only>(b, k, radial_x * r_q, b.y[k], radial_z * r_q);
+      set_depth(b, k, radial_x * r_q, b.y[k], radial_z * r_q);
+    }
+    if (compacted) {
+      expand_defined(b);
     }
   }
 

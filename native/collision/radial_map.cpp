@@ -2,6 +2,10 @@
 
 #include <algorithm>
 
+#if defined(HAIRDYN_BLEND_AVX2)
+#include <immintrin.h>
+#endif
+
 namespace hairdyn {
 
 mat4 MapFrame::map_to_object() const
@@ -121,12 +125,26 @@ MapFrame fit_frame(const Span<vec3> vertices, const Span<ivec3> triangles)
 
 int64_t RadialTable::empty_cells_num() const
 {
-  return std::count_if(cells_.begin(), cells_.end(),
-                       [](const MapCell &cell) { return cell.radius < 0.0f; });
+  int64_t num = 0;
+  for (int32_t j = 0; j < v_num_; j++) {
+    for (int32_t i = 0; i < u_num_; i++) {
+      num += cell(i, j).radius < 0.0f ? 1 : 0;
+    }
+  }
+  return num;
 }
 
-void RadialTable::update_max_radius()
+void RadialTable::finish_build()
 {
+  for (int32_t j = 0; j <= v_num_; j++) {
+    const int32_t row = std::min(j, v_num_ - 1);
+    for (int32_t i = 0; i <= u_num_; i++) {
+      if (i < u_num_ && j < v_num_) {
+        continue;
+      }
+      cell_for_write(i, j) = cell(i % u_num_, row);
+    }
+  }
   max_radius_ = 0.0f;
   for (const MapCell &cell : cells_) {
     max_radius_ = std::max(max_radius_, cell.radius);
@@ -164,5 +182,183 @@ void fill_cell_from_ray(const TriangleBVH &bvh, const Span<vec3> vertices,
   r_cell.normal = normal;
   r_cell.radius = radius;
 }
+
+#if defined(HAIRDYN_BLEND_AVX2)
+namespace {
+
+/* The cells at float offsets lo and hi of `cells` as the low and high halves of one vector. */
+__attribute__((target("avx2"))) inline __m256 load_two_cells(const float *cells,
+                                                             const uint32_t lo, const uint32_t hi)
+{
+  return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(cells + lo)),
+                              _mm_loadu_ps(cells + hi), 1);
+}
+
+/* For each mask of 8 lanes, the lanes set, first (the permutation that packs them to the
+ * front), and how many there are. */
+struct LeftPack {
+  alignas(32) int32_t lanes[256][8];
+  /* The inverse: for each lane set, its rank among them (0 for the others). */
+  alignas(32) int32_t ranks[256][8];
+  int32_t count[256];
+  LeftPack()
+  {
+    for (int mask = 0; mask < 256; mask++) {
+      int n = 0;
+      for (int lane = 0; lane < 8; lane++) {
+        ranks[mask][lane] = 0;
+        if (mask & (1 << lane)) {
+          ranks[mask][lane] = n;
+          lanes[mask][n++] = lane;
+        }
+      }
+      count[mask] = n;
+      while (n < 8) {
+        lanes[mask][n++] = 0;
+      }
+    }
+  }
+};
+const LeftPack left_pack;
+
+__attribute__((target("avx2"))) inline void pack_floats(float *values, const int64_t n,
+                                                        const int64_t k, const __m256i lanes)
+{
+  _mm256_storeu_ps(values + n, _mm256_permutevar8x32_ps(_mm256_loadu_ps(values + k), lanes));
+}
+
+}  // namespace
+
+__attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_size> &b,
+                                                          const bool carry_v, int64_t &r_n,
+                                                          int64_t &r_k)
+{
+  int64_t n = r_n, k = r_k;
+  const __m256i zero = _mm256_setzero_si256();
+  for (; k + 8 <= b.size; k += 8) {
+    /* Loads before stores: slots n .. n + 7 (n <= k) may overlap points k .. k + 7. */
+    const __m256i defined =
+        _mm256_loadu_si256(reinterpret_cast<const __m256i *>(b.defined + k));
+    const int mask = _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(defined, zero)));
+    const __m256i lanes =
+        _mm256_load_si256(reinterpret_cast<const __m256i *>(left_pack.lanes[mask]));
+    const __m256i index = _mm256_add_epi32(_mm256_set1_epi32(int32_t(k)),
+                                           _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    _mm256_storeu_si256(reinterpret_cast<__m256i *>(b.index + n),
+                        _mm256_permutevar8x32_epi32(index, lanes));
+    pack_floats(b.x, n, k, lanes);
+    pack_floats(b.y, n, k, lanes);
+    pack_floats(b.z, n, k, lanes);
+    pack_floats(b.r_p, n, k, lanes);
+    if (carry_v) {
+      pack_floats(b.v, n, k, lanes);
+    }
+    b.group_masks[k / 8] = uint8_t(mask);
+    n += left_pack.count[mask];
+  }
+  b.packed_points = k;
+  b.packed_slots = n;
+  r_n = n;
+  r_k = k;
+}
+
+__attribute__((target("avx2"))) void expand_defined_avx2(MapBatch<map_batch_size> &b)
+{
+  /* Backward, group by group: group g's slots start at n, after the slots of the groups
+   * below it, and n <= k: its stores (points k .. k + 7) reach no slot still to be read. */
+  int64_t n = b.packed_slots;
+  const __m256i lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256i one = _mm256_set1_epi32(1);
+  for (int64_t k = b.packed_points - 8; k >= 0; k -= 8) {
+    const int mask = b.group_masks[k / 8];
+    n -= left_pack.count[mask];
+    const __m256i ranks =
+        _mm256_load_si256(reinterpret_cast<const __m256i *>(left_pack.ranks[mask]));
+    const __m256i kept = _mm256_cmpeq_epi32(
+        _mm256_and_si256(_mm256_set1_epi32(mask), lane_bits), lane_bits);
+    /* valid | inside << 1, as expand_defined keeps them in c00. */
+    const __m256i codes = _mm256_permutevar8x32_epi32(
+        _mm256_loadu_si256(reinterpret_cast<const __m256i *>(b.c00 + n)), ranks);
+    _mm256_storeu_si256(reinterpret_cast<__m256i *>(b.valid + k),
+                        _mm256_and_si256(_mm256_and_si256(codes, one), kept));
+    _mm256_storeu_si256(reinterpret_cast<__m256i *>(b.inside + k),
+                        _mm256_and_si256(_mm256_srli_epi32(codes, 1), kept));
+    /* The other points' values are not valid: whatever lands there is never read. */
+    for (float *values : { b.depth, b.nx, b.ny, b.nz, b.x, b.y, b.z }) {
+      _mm256_storeu_ps(values + k,
+                       _mm256_permutevar8x32_ps(_mm256_loadu_ps(values + n), ranks));
+    }
+  }
+}
+
+__attribute__((target("avx2"))) int64_t RadialTable::blend_avx2(
+    MapBatch<map_batch_size> &b) const
+{
+  const float *cells = reinterpret_cast<const float *>(cells_.data());
+  const float *cells_next_v = cells + next_v();
+  int64_t k = 0;
+  for (; k + 8 <= b.size; k += 8) {
+    /* The weights of points k .. k + 7, as blend computes them. */
+    const __m256 w00 = _mm256_loadu_ps(b.w00 + k), w10 = _mm256_loadu_ps(b.w10 + k);
+    const __m256 w01 = _mm256_loadu_ps(b.w01 + k), w11 = _mm256_loadu_ps(b.w11 + k);
+    /* Vector q holds point k + q in its low half and point k + 4 + q in its high half, so
+     * that the 4 × 4 transposes within each half give the points in order. */
+    __m256 sum[4], low[4];
+    for (int q = 0; q < 4; q++) {
+      const int64_t i = k + q, j = k + 4 + q;
+      const __m256i lane = _mm256_setr_epi32(q, q, q, q, q + 4, q + 4, q + 4, q + 4);
+      const uint32_t ci = b.c00[i], cj = b.c00[j];
+      const __m256 c00 = load_two_cells(cells, ci, cj);
+      const __m256 c10 = load_two_cells(cells + next_u, ci, cj);
+      const __m256 c01 = load_two_cells(cells_next_v, ci, cj);
+      const __m256 c11 = load_two_cells(cells_next_v + next_u, ci, cj);
+      sum[q] = _mm256_add_ps(
+          _mm256_add_ps(
+              _mm256_add_ps(_mm256_mul_ps(c00, _mm256_permutevar8x32_ps(w00, lane)),
+                            _mm256_mul_ps(c10, _mm256_permutevar8x32_ps(w10, lane))),
+              _mm256_mul_ps(c01, _mm256_permutevar8x32_ps(w01, lane))),
+          _mm256_mul_ps(c11, _mm256_permutevar8x32_ps(w11, lane)));
+      low[q] = _mm256_min_ps(_mm256_min_ps(c00, c10), _mm256_min_ps(c01, c11));
+    }
+    /* (nx, ny, nz, r_q) of the points as rows: transposed into the batch's arrays. */
+    const __m256 xy01 = _mm256_unpacklo_ps(sum[0], sum[1]);
+    const __m256 xy23 = _mm256_unpacklo_ps(sum[2], sum[3]);
+    const __m256 zr01 = _mm256_unpackhi_ps(sum[0], sum[1]);
+    const __m256 zr23 = _mm256_unpackhi_ps(sum[2], sum[3]);
+    const __m256 nx = _mm256_shuffle_ps(xy01, xy23, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m256 ny = _mm256_shuffle_ps(xy01, xy23, _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256 nz = _mm256_shuffle_ps(zr01, zr23, _MM_SHUFFLE(1, 0, 1, 0));
+    const __m256 r_q = _mm256_shuffle_ps(zr01, zr23, _MM_SHUFFLE(3, 2, 3, 2));
+    /* The radii's minimum is the last lane of each point's componentwise minimum. */
+    const __m256 min_radius = _mm256_shuffle_ps(_mm256_unpackhi_ps(low[0], low[1]),
+                                                _mm256_unpackhi_ps(low[2], low[3]),
+                                                _MM_SHUFFLE(3, 2, 3, 2));
+    const __m256i filled = _mm256_srli_epi32(
+        _mm256_castps_si256(_mm256_cmp_ps(min_radius, _mm256_setzero_ps(), _CMP_GE_OQ)), 31);
+    __m256i *defined = reinterpret_cast<__m256i *>(b.defined + k);
+    _mm256_storeu_si256(defined, _mm256_and_si256(_mm256_loadu_si256(defined), filled));
+    _mm256_storeu_ps(b.r_q + k, r_q);
+    _mm256_storeu_ps(b.nx + k, nx);
+    _mm256_storeu_ps(b.ny + k, ny);
+    _mm256_storeu_ps(b.nz + k, nz);
+    /* Opposite normals cancelling out (rare): the first cell's normal, as in blend. */
+    const __m256 length_sq = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(nx, nx), _mm256_mul_ps(ny, ny)), _mm256_mul_ps(nz, nz));
+    const int keep = _mm256_movemask_ps(
+        _mm256_cmp_ps(length_sq, _mm256_set1_ps(1e-12f), _CMP_GT_OQ));
+    if (keep != 0xff) {
+      for (int q = 0; q < 8; q++) {
+        if (!(keep & (1 << q))) {
+          const float *c00 = cells + b.c00[k + q];
+          b.nx[k + q] = c00[0];
+          b.ny[k + q] = c00[1];
+          b.nz[k + q] = c00[2];
+        }
+      }
+    }
+  }
+  return k;
+}
+#endif
 
 }  // namespace hairdyn

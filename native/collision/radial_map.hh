@@ -53,12 +53,22 @@ struct MapSample {
 #define HAIRDYN_BATCH_INLINE inline
 #endif
 
-/* Points per batched look-up: the batch's arrays (about 20 floats per point) stay in L1. */
-constexpr int64_t map_batch_size = 256;
+/* Points per batched look-up: the batch's arrays (about 25 floats per point, 13 KB) stay in L1
+ * next to a default table (40 × 40 cells, 26 KB). */
+constexpr int64_t map_batch_size = 128;
+
+/* The batched look-up's gather has an AVX2 form (RadialTable::blend_avx2), compiled for AVX2
+ * on its own and called only where MapBatch::avx2 says the CPU has it. */
+#if defined(__GNUC__) && defined(__x86_64__)
+#define HAIRDYN_BLEND_AVX2 1
+#endif
 
 /* A batch of map look-ups as a structure of arrays, so that each stage of the look-up is one
- * branch-free loop the compiler vectorises: (1) table coordinates and cell indices, (2) the
- * gather of the four cells (SSE by hand, four points at a time), (3) eq. 9–11. The loops
+ * branch-free loop the compiler vectorises: (1) table coordinates, cell offsets and
+ * weights, (2) the gather of the four cells (SSE by hand, four points at a time, or AVX2
+ * eight at a time), (3) eq. 9–11. Long stages are split into short loops, one step each:
+ * their iterations overlap in the CPU, where a long loop's chain of sqrt, division and
+ * polynomial would leave it waiting. The loops
  * vectorise only with -fno-trapping-math (set for collider.cpp in CMakeLists.txt): with
  * trapping math GCC keeps the selects as branches. The per-point calls run the
  * same code with N = 1. Inputs x, y, z (map space); outputs valid, inside, depth, nx, ny, nz
@@ -71,9 +81,116 @@ template<int64_t N> struct MapBatch {
   int32_t inside[N]; /* r_p < r_q. */
   float depth[N], nx[N], ny[N], nz[N];
   /* Between the stages. */
-  int32_t defined[N], cell[N], du[N], dv[N];
-  float r_p[N], v[N], s[N], t[N], r_q[N];
+  int32_t defined[N];
+  uint32_t c00[N]; /* Cell (i, j)'s offset into the table's floats (RadialTable::locate). */
+  float r_p[N], u[N], v[N], r_q[N];
+  /* The bilinear weights of the four cells (eq. 9), (1 - s)(1 - t), s(1 - t), (1 - s)t, st. */
+  float w00[N], w10[N], w01[N], w11[N];
+  /* Blend with AVX2 (RadialTable::blend_avx2): set by the caller when the CPU has it. */
+  bool avx2 = false;
+  /* While compacted (compact_defined): the batch's size before, and where each point was;
+   * with AVX2, which of each group of eight points were kept, for how many points and slots
+   * (compact_defined_avx2). */
+  int64_t full_size = 0;
+  int32_t index[N];
+  uint8_t group_masks[N / 8 + 1];
+  int64_t packed_points = 0, packed_slots = 0;
 };
+
+#if defined(HAIRDYN_BLEND_AVX2)
+/* compact_defined's loop eight points at a time (left-packed by a permutation), from point
+ * r_k and slot r_n on: advances both past the last whole group of eight. */
+__attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_size> &b,
+                                                          bool carry_v, int64_t &r_n,
+                                                          int64_t &r_k);
+/* expand_defined's loop for the groups compact_defined_avx2 packed. */
+__attribute__((target("avx2"))) void expand_defined_avx2(MapBatch<map_batch_size> &b);
+#endif
+
+/* A batch in which few points can be inside (the others are beyond the map's largest radius
+ * or outside its height range: the shell of a query around a collider, most of a groom) looks
+ * up only those. compact_defined moves them to the front of the batch (x, y, z, r_p and, with
+ * carry_v, v), the stages run on them alone, and expand_defined moves their results back
+ * (valid, inside, depth, N, and x, y, z); the other points are left not valid. A point's
+ * operations are the same either way, only which lane runs them changes. Returns false (and
+ * leaves the batch as it is) when more than 3/4 of the points are defined. */
+template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
+{
+  int32_t defined_num = 0;
+  for (int64_t k = 0; k < b.size; k++) {
+    defined_num += b.defined[k];
+  }
+  if (4 * int64_t(defined_num) > 3 * b.size) {
+    return false;
+  }
+  /* Forward, in place: slot n <= k has been read by the time it is written. Branch-free:
+   * every point is written, and n moves on only past a defined one. */
+  int64_t n = 0, k = 0;
+#if defined(HAIRDYN_BLEND_AVX2)
+  if constexpr (N == map_batch_size) {
+    if (b.avx2) {
+      compact_defined_avx2(b, carry_v, n, k);
+    }
+  }
+#endif
+  for (; k < b.size; k++) {
+    b.index[n] = int32_t(k);
+    b.x[n] = b.x[k];
+    b.y[n] = b.y[k];
+    b.z[n] = b.z[k];
+    b.r_p[n] = b.r_p[k];
+    if constexpr (carry_v) {
+      b.v[n] = b.v[k];
+    }
+    n += b.defined[k];
+  }
+  b.full_size = b.size;
+  b.size = n;
+  for (int64_t j = 0; j < n; j++) {
+    b.defined[j] = 1;
+  }
+  return true;
+}
+
+template<int64_t N> HAIRDYN_BATCH_INLINE void expand_defined(MapBatch<N> &b)
+{
+  const int64_t n = b.size;
+  /* valid and inside kept aside (in c00, read by no later stage), then cleared everywhere. */
+  for (int64_t j = 0; j < n; j++) {
+    b.c00[j] = uint32_t(b.valid[j] | (b.inside[j] << 1));
+  }
+  for (int64_t k = 0; k < b.full_size; k++) {
+    b.valid[k] = 0;
+    b.inside[k] = 0;
+  }
+  /* Backward, in place: index[j] >= j, and the slots below j are still to be read. */
+  int64_t j_end = 0;
+#if defined(HAIRDYN_BLEND_AVX2)
+  if constexpr (N == map_batch_size) {
+    j_end = b.avx2 ? b.packed_slots : 0;
+  }
+#endif
+  for (int64_t j = n - 1; j >= j_end; j--) {
+    const int64_t k = b.index[j];
+    b.valid[k] = int32_t(b.c00[j] & 1u);
+    b.inside[k] = int32_t(b.c00[j] >> 1);
+    b.depth[k] = b.depth[j];
+    b.nx[k] = b.nx[j];
+    b.ny[k] = b.ny[j];
+    b.nz[k] = b.nz[j];
+    b.x[k] = b.x[j];
+    b.y[k] = b.y[j];
+    b.z[k] = b.z[j];
+  }
+#if defined(HAIRDYN_BLEND_AVX2)
+  if constexpr (N == map_batch_size) {
+    if (b.avx2) {
+      expand_defined_avx2(b);
+    }
+  }
+#endif
+  b.size = b.full_size;
+}
 
 /* x clamped to [lo, hi], NaN to lo: both comparisons are false for NaN, so no input can give
  * a value outside the range (and a cell index cast from it stays inside the table). */
@@ -117,13 +234,16 @@ struct MapCell {
 };
 static_assert(sizeof(MapCell) == 16, "one cell is 16 bytes: four cells per cache line");
 
-/* The m × n table. u (azimuth, 0 <= u < m) wraps around; v (0 <= v <= n - 1) is clamped. */
+/* The m × n table. u (azimuth, 0 <= u < m) wraps around; v (0 <= v <= n - 1) is clamped.
+ * Stored padded to (m + 1) × (n + 1): column m repeats column 0 and row n repeats row n - 1,
+ * so that a cell's neighbours along u and v are always the next cell and the next row, the
+ * wrap and the clamp included (the look-up reads one offset per point, no selects). */
 class RadialTable {
  public:
   RadialTable() = default;
   RadialTable(int32_t u_num, int32_t v_num) :
       u_num_(u_num), v_num_(v_num), u_last_(std::nextafter(float(u_num), 0.0f)),
-      cells_(size_t(u_num) * size_t(v_num))
+      cells_(size_t(u_num + 1) * size_t(v_num + 1))
   {
   }
 
@@ -131,20 +251,22 @@ class RadialTable {
   int32_t v_num() const { return v_num_; }
   MapCell &cell_for_write(const int32_t u, const int32_t v)
   {
-    return cells_[size_t(v * u_num_ + u)];
+    return cells_[size_t(v * (u_num_ + 1) + u)];
   }
   const MapCell &cell(const int32_t u, const int32_t v) const
   {
-    return cells_[size_t(v * u_num_ + u)];
+    return cells_[size_t(v * (u_num_ + 1) + u)];
   }
   int64_t empty_cells_num() const;
   /* Largest radius of a filled cell (0 when all are empty). */
   float max_radius() const { return max_radius_; }
-  void update_max_radius();
+  /* Once every cell is written: the padding and the largest radius. */
+  void finish_build();
 
   /* Stage 1 of the bilinear look-up for point k (Kurihara 1993, eq. 8 and 10): the cell
-   * i <= u < i + 1, j <= v < j + 1 and the fractions s, t. u wraps once around [0, m), v is
-   * clamped to [0, n - 1]; anything else (NaN, infinities) lands in cell (0, 0). */
+   * i <= u < i + 1, j <= v < j + 1 and the weights of the fractions s = u - i, t = v - j. u
+   * wraps once around [0, m), v is clamped to [0, n - 1]; anything else (NaN, infinities)
+   * lands in cell (0, 0). */
   /* The table's size as values: read once before a loop over the batch (a store into the
    * batch's int32 arrays could otherwise be the table's own fields, for all the compiler
    * knows, and the loop would neither keep them in registers nor vectorise). */
@@ -153,6 +275,9 @@ class RadialTable {
     float u_last;
   };
   Shape shape() const { return { u_num_, v_num_, u_last_ }; }
+  /* Float offsets from a cell to its neighbour along u and along v (the padded layout). */
+  static constexpr uint32_t next_u = 4;
+  uint32_t next_v() const { return 4u * uint32_t(u_num_ + 1); }
 
   template<int64_t N> static HAIRDYN_BATCH_INLINE void locate(const Shape shape, MapBatch<N> &b,
                                                               const int64_t k, float u,
@@ -165,11 +290,13 @@ class RadialTable {
     const float v_clamped = clamp_or_low(v, 0.0f, float(shape.v_num - 1));
     const int32_t i0 = int32_t(u);
     const int32_t j0 = int32_t(v_clamped);
-    b.cell[k] = j0 * shape.u_num + i0;
-    b.du[k] = i0 + 1 == shape.u_num ? 1 - shape.u_num : 1;
-    b.dv[k] = j0 + 1 < shape.v_num ? shape.u_num : 0;
-    b.s[k] = u - float(i0);
-    b.t[k] = v_clamped - float(j0);
+    /* The cell's offset in floats; its neighbours are at next_u, next_v (padded layout). */
+    b.c00[k] = 4u * uint32_t(j0 * (shape.u_num + 1) + i0);
+    const float s = u - float(i0), t = v_clamped - float(j0);
+    b.w00[k] = (1.0f - s) * (1.0f - t);
+    b.w10[k] = s * (1.0f - t);
+    b.w01[k] = (1.0f - s) * t;
+    b.w11[k] = s * t;
   }
 
   /* Stage 2: the gather. Eq. 9: r_q by bilinear interpolation of the four cells' radii; §3.1
@@ -179,7 +306,15 @@ class RadialTable {
   {
     /* The cells as floats (normal x, y, z, radius). */
     const float *cells = reinterpret_cast<const float *>(cells_.data());
+    const float *cells_next_v = cells + next_v();
     int64_t k = 0;
+#if defined(HAIRDYN_BLEND_AVX2)
+    if constexpr (N == map_batch_size) {
+      if (b.avx2) {
+        k = blend_avx2(b);
+      }
+    }
+#endif
 #if defined(__SSE2__)
     /* Four points at a time: each cell is one 16-byte load (normal and radius together),
      * blended as a vector with the same products and sums, in the same order, as the scalar
@@ -187,17 +322,11 @@ class RadialTable {
      * compiler makes no gathers of the scalar form's 16 indexed loads per point, and on
      * CPUs that split 256-bit gathers they would be slower than these loads.) */
     for (; N >= 4 && k + 4 <= b.size; k += 4) {
-      /* The weights as the scalar lanes compute them, four points at once. */
-      const __m128 one = _mm_set1_ps(1.0f);
-      const __m128 s = _mm_loadu_ps(b.s + k), t = _mm_loadu_ps(b.t + k);
-      const __m128 s_1 = _mm_sub_ps(one, s), t_1 = _mm_sub_ps(one, t);
-      const __m128 w00 = _mm_mul_ps(s_1, t_1), w10 = _mm_mul_ps(s, t_1);
-      const __m128 w01 = _mm_mul_ps(s_1, t), w11 = _mm_mul_ps(s, t);
       __m128 sum[4], low[4], first[4];
-      blend_cells<0>(cells, b, k, w00, w10, w01, w11, sum[0], low[0], first[0]);
-      blend_cells<1>(cells, b, k, w00, w10, w01, w11, sum[1], low[1], first[1]);
-      blend_cells<2>(cells, b, k, w00, w10, w01, w11, sum[2], low[2], first[2]);
-      blend_cells<3>(cells, b, k, w00, w10, w01, w11, sum[3], low[3], first[3]);
+      blend_cells(cells, cells_next_v, b, k, sum[0], low[0], first[0]);
+      blend_cells(cells, cells_next_v, b, k + 1, sum[1], low[1], first[1]);
+      blend_cells(cells, cells_next_v, b, k + 2, sum[2], low[2], first[2]);
+      blend_cells(cells, cells_next_v, b, k + 3, sum[3], low[3], first[3]);
       _MM_TRANSPOSE4_PS(sum[0], sum[1], sum[2], sum[3]);         /* nx, ny, nz, r_q */
       _MM_TRANSPOSE4_PS(first[0], first[1], first[2], first[3]); /* c00's normal (and radius) */
       /* The radii's minimum is lane 3 of each point's componentwise minimum. */
@@ -221,11 +350,9 @@ class RadialTable {
     }
 #endif
     for (; k < b.size; k++) {
-      const int32_t c00 = 4 * b.cell[k], c10 = 4 * (b.cell[k] + b.du[k]);
-      const int32_t c01 = 4 * (b.cell[k] + b.dv[k]), c11 = 4 * (b.cell[k] + b.du[k] + b.dv[k]);
-      const float s = b.s[k], t = b.t[k];
-      const float w00 = (1.0f - s) * (1.0f - t), w10 = s * (1.0f - t);
-      const float w01 = (1.0f - s) * t, w11 = s * t;
+      const uint32_t c00 = b.c00[k], c10 = c00 + next_u, c01 = c00 + next_v(),
+                     c11 = c01 + next_u;
+      const float w00 = b.w00[k], w10 = b.w10[k], w01 = b.w01[k], w11 = b.w11[k];
       const float r00 = cells[c00 + 3], r10 = cells[c10 + 3], r01 = cells[c01 + 3],
                   r11 = cells[c11 + 3];
       const float min_radius = std::min(std::min(r00, r10), std::min(r01, r11));
@@ -245,26 +372,32 @@ class RadialTable {
     }
   }
 
+#if defined(HAIRDYN_BLEND_AVX2)
+  /* Stage 2 eight points at a time with 256-bit vectors, two points per vector, the same
+   * products and sums in the same order as blend's: the same bits. Returns the points done
+   * (the batch's size rounded down to a multiple of 8); blend does the rest. */
+  __attribute__((target("avx2"))) int64_t blend_avx2(MapBatch<map_batch_size> &b) const;
+#endif
+
  private:
 #if defined(__SSE2__)
-  /* Point k + q's four cells blended as (nx, ny, nz, r): c00 w00 + c10 w10 + c01 w01 +
-   * c11 w11 with lane q of the weights, their componentwise minimum, and c00 itself. */
-  template<int q, int64_t N> static HAIRDYN_BATCH_INLINE void blend_cells(
-      const float *cells, const MapBatch<N> &b, const int64_t k, const __m128 w00,
-      const __m128 w10, const __m128 w01, const __m128 w11, __m128 &r_sum, __m128 &r_min,
-      __m128 &r_first)
+  /* Point k's four cells blended as (nx, ny, nz, r): c00 w00 + c10 w10 + c01 w01 + c11 w11
+   * (each weight broadcast from memory: one load, no shuffle, with AVX), their componentwise
+   * minimum, and c00 itself. */
+  template<int64_t N> static HAIRDYN_BATCH_INLINE void blend_cells(const float *cells,
+                                                                   const float *cells_next_v,
+                                                                   const MapBatch<N> &b,
+                                                                   const int64_t k,
+                                                                   __m128 &r_sum, __m128 &r_min,
+                                                                   __m128 &r_first)
   {
-    const float *p00 = cells + 4 * b.cell[k + q];
-    const float *p10 = p00 + 4 * b.du[k + q];
-    const float *p01 = p00 + 4 * b.dv[k + q];
-    const float *p11 = p10 + 4 * b.dv[k + q];
-    const __m128 c00 = _mm_loadu_ps(p00), c10 = _mm_loadu_ps(p10);
-    const __m128 c01 = _mm_loadu_ps(p01), c11 = _mm_loadu_ps(p11);
-    constexpr int lane = _MM_SHUFFLE(q, q, q, q);
-    r_sum = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(c00, _mm_shuffle_ps(w00, w00, lane)),
-                                             _mm_mul_ps(c10, _mm_shuffle_ps(w10, w10, lane))),
-                                  _mm_mul_ps(c01, _mm_shuffle_ps(w01, w01, lane))),
-                       _mm_mul_ps(c11, _mm_shuffle_ps(w11, w11, lane)));
+    const float *p00 = cells + b.c00[k], *p01 = cells_next_v + b.c00[k];
+    const __m128 c00 = _mm_loadu_ps(p00), c10 = _mm_loadu_ps(p00 + next_u);
+    const __m128 c01 = _mm_loadu_ps(p01), c11 = _mm_loadu_ps(p01 + next_u);
+    r_sum = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(c00, _mm_set1_ps(b.w00[k])),
+                                             _mm_mul_ps(c10, _mm_set1_ps(b.w10[k]))),
+                                  _mm_mul_ps(c01, _mm_set1_ps(b.w01[k]))),
+                       _mm_mul_ps(c11, _mm_set1_ps(b.w11[k])));
     r_min = _mm_min_ps(_mm_min_ps(c00, c10), _mm_min_ps(c01, c11));
     r_first = c00;
   }
@@ -276,19 +409,27 @@ class RadialTable {
   float max_radius_ = 0.0f;
 };
 
-/* Stage 3's end, shared by both maps (Kurihara 1993, eq. 11): N normalised, Q given, the
- * depth (Q - P) · N along N; valid where defined and, with inside_only, r_p < r_q. */
-template<bool inside_only, int64_t N> HAIRDYN_BATCH_INLINE void finish_lane(
-    MapBatch<N> &b, const int64_t k, const float qx, const float qy, const float qz)
+/* Stage 3's end, shared by both maps (Kurihara 1993, eq. 11), in two loops (see MapBatch):
+ * normalise_normals makes N unit and sets valid where defined and, with
+ * inside_only, r_p < r_q; then each map gives Q to set_depth, the depth (Q - P) · N along N. */
+template<bool inside_only, int64_t N> HAIRDYN_BATCH_INLINE void normalise_normals(MapBatch<N> &b)
 {
-  const float nx = b.nx[k], ny = b.ny[k], nz = b.nz[k];
-  const float inv = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
-  b.nx[k] = nx * inv;
-  b.ny[k] = ny * inv;
-  b.nz[k] = nz * inv;
-  const int32_t inside = b.r_p[k] < b.r_q[k] ? 1 : 0;
-  b.inside[k] = inside;
-  b.valid[k] = b.defined[k] & (inside | (inside_only ? 0 : 1));
+  for (int64_t k = 0; k < b.size; k++) {
+    const float nx = b.nx[k], ny = b.ny[k], nz = b.nz[k];
+    const float inv = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
+    b.nx[k] = nx * inv;
+    b.ny[k] = ny * inv;
+    b.nz[k] = nz * inv;
+    const int32_t inside = b.r_p[k] < b.r_q[k] ? 1 : 0;
+    b.inside[k] = inside;
+    b.valid[k] = b.defined[k] & (inside | (inside_only ? 0 : 1));
+  }
+}
+
+template<int64_t N> HAIRDYN_BATCH_INLINE void set_depth(MapBatch<N> &b, const int64_t k,
+                                                        const float qx, const float qy,
+                                                        const float qz)
+{
   /* PT = (PQ · N) N. */
   b.depth[k] = (qx - b.x[k]) * b.nx[k] + (qy - b.y[k]) * b.ny[k] + (qz - b.z[k]) * b.nz[k];
 }

@@ -29,7 +29,7 @@ SphereMap::SphereMap(const TriangleBVH &bvh, const Span<vec3> vertices,
   });
   fill_cell_from_ray(bvh, vertices, triangles, map_to_object, vec3(0.0f), vec3(0, 1, 0), north_);
   fill_cell_from_ray(bvh, vertices, triangles, map_to_object, vec3(0.0f), vec3(0, -1, 0), south_);
-  table_.update_max_radius();
+  table_.finish_build();
   const float max_radius = std::max(table_.max_radius(), std::max(north_.radius, south_.radius));
   max_radius_sq_ = max_radius * max_radius;
 }

@@ -48,16 +48,33 @@ class SphereMap {
     const RadialTable::Shape shape = table_.shape();
     const float u_per_radian = u_per_radian_, v_per_radian = v_per_radian_;
     const float v_last = float(table_.v_num() - 1);
+    /* Whether any point is within half a row of a pole (few are: the pole blend below is
+     * skipped for batches with none). */
+    int32_t any_near_pole = 0;
+    /* Short loops, one step each (see MapBatch). */
     for (int64_t k = 0; k < b.size; k++) {
       const float x = b.x[k], y = b.y[k], z = b.z[k];
       const float rho_xz_sq = x * x + z * z;
       const float r_sq = rho_xz_sq + y * y;
       b.r_p[k] = std::sqrt(r_sq);
       b.defined[k] = inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1;
-      /* θ around the pole axis, φ from it. */
-      const float v = fast_atan2(std::sqrt(rho_xz_sq), y) * v_per_radian - 0.5f;
+      b.v[k] = std::sqrt(rho_xz_sq);
+    }
+    bool compacted = false;
+    if constexpr (inside_only && N > 1) {
+      compacted = compact_defined<true>(b);
+    }
+    /* θ around the pole axis, φ from it. */
+    for (int64_t k = 0; k < b.size; k++) {
+      const float v = fast_atan2(b.v[k], b.y[k]) * v_per_radian - 0.5f;
       b.v[k] = v;
-      RadialTable::locate(shape, b, k, fast_atan2(z, x) * u_per_radian, v);
+      any_near_pole |= (v < 0.0f ? 1 : 0) | (v > v_last ? 1 : 0);
+    }
+    for (int64_t k = 0; k < b.size; k++) {
+      b.u[k] = fast_atan2(b.z[k], b.x[k]) * u_per_radian;
+    }
+    for (int64_t k = 0; k < b.size; k++) {
+      RadialTable::locate(shape, b, k, b.u[k], b.v[k]);
     }
     if constexpr (N == 1) {
       /* A single point (the per-point calls) stops here when it cannot be inside. */
@@ -67,6 +84,32 @@ class SphereMap {
       }
     }
     table_.blend(b);
+    if (any_near_pole) {
+      blend_poles(b);
+    }
+    normalise_normals<inside_only>(b);
+    for (int64_t k = 0; k < b.size; k++) {
+      /* Q: same direction from the centre as P, at radius r_q. */
+      const float r_p = b.r_p[k];
+      const bool off_centre = r_p > 0.0f;
+      const float inv_r = 1.0f / (off_centre ? r_p : 1.0f);
+      const float ux = b.x[k] * inv_r, uy = b.y[k] * inv_r, uz = b.z[k] * inv_r;
+      const float dx = off_centre ? ux : 0.0f;
+      const float dy = off_centre ? uy : 1.0f;
+      const float dz = off_centre ? uz : 0.0f;
+      set_depth(b, k, dx * b.r_q[k], dy * b.r_q[k], dz * b.r_q[k]);
+    }
+    if (compacted) {
+      expand_defined(b);
+    }
+  }
+
+ private:
+  /* Within half a row of a pole, r_q and N of the first (last) row blended linearly into the
+   * pole's sample. */
+  template<int64_t N> HAIRDYN_BATCH_INLINE void blend_poles(MapBatch<N> &b) const
+  {
+    const float v_last = float(table_.v_num() - 1);
     const MapCell north = north_, south = south_;
     for (int64_t k = 0; k < b.size; k++) {
       /* Between the first (last) row and the pole: w = 1 at the pole. */
@@ -80,8 +123,8 @@ class SphereMap {
       const float r_q = b.r_q[k];
       const float r_q_pole = r_q + w * (pole_radius - r_q);
       b.r_q[k] = near_pole ? r_q_pole : r_q;
-      /* Near a pole, the row's normal (normalised) blended toward the pole's; finish_lane
-       * normalises. */
+      /* Near a pole, the row's normal (normalised) blended toward the pole's;
+       * normalise_normals normalises. */
       const float nx = b.nx[k], ny = b.ny[k], nz = b.nz[k];
       const float inv = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
       const float mx = nx * inv, my = ny * inv, mz = nz * inv;
@@ -92,19 +135,9 @@ class SphereMap {
       b.nx[k] = near_pole ? bx : nx;
       b.ny[k] = near_pole ? by : ny;
       b.nz[k] = near_pole ? bz : nz;
-      /* Q: same direction from the centre as P, at radius r_q. */
-      const float r_p = b.r_p[k];
-      const bool off_centre = r_p > 0.0f;
-      const float inv_r = 1.0f / (off_centre ? r_p : 1.0f);
-      const float ux = b.x[k] * inv_r, uy = b.y[k] * inv_r, uz = b.z[k] * inv_r;
-      const float dx = off_centre ? ux : 0.0f;
-      const float dy = off_centre ? uy : 1.0f;
-      const float dz = off_centre ? uz : 0.0f;
-      finish_lane<inside_only>(b, k, dx * b.r_q[k], dy * b.r_q[k], dz * b.r_q[k]);
     }
   }
 
- private:
   MapFrame frame_;
   mat4 object_to_map_{ 1.0f };
   RadialTable table_;
