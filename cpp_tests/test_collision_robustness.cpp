@@ -194,31 +194,71 @@ TEST(CollisionRobustness, RandomTransformsAndPointsAgreeBatchedAndPerPoint)
   EXPECT_GT(hits, 100); /* The ordinary trials found contacts, and they agreed. */
 }
 
-TEST(CollisionRobustness, BatchedQueryHasTheSameBitsOnOneAndTwoThreads)
+namespace {
+
+/* Two placements that take depth and normal to world space the two ways: a similarity and a
+ * shear. */
+std::vector<mat4> similarity_and_shear()
 {
-  /* Many points in a shell around two overlapping spheres (a cylinder map and a sphere map),
-   * with a similarity placement and a sheared one (the two ways depth and normal are taken
-   * to world space): several parallel chunks and a partial last batch. Every answer equals the
-   * per-point query's, and one and two threads give the same bits. */
-  std::mt19937 rng(11);
-  std::normal_distribution<float> gauss;
-  std::uniform_real_distribution<float> radius(0.0f, 1.3f);
-  std::vector<vec3> points(3 * 4096 + 1000);
-  for (vec3 &p : points) {
-    p = glm::normalize(vec3(gauss(rng), gauss(rng), gauss(rng))) * radius(rng);
-  }
-  /* Points on the axes and poles of the maps. */
-  for (const float r : { 0.0f, 0.3f, 0.9f }) {
-    points.emplace_back(0.0f, r, 0.0f);
-    points.emplace_back(0.0f, -r, 0.0f);
-  }
   mat4 shear(1.0f);
   shear[1][0] = 0.3f;
   const mat4 similarity =
       glm::scale(glm::rotate(glm::translate(mat4(1.0f), vec3(0.1f, -0.2f, 0.05f)), 0.7f,
                              glm::normalize(vec3(1, 2, 3))),
                  vec3(1.2f));
-  for (const mat4 &m : { similarity, shear }) {
+  return { similarity, shear };
+}
+
+/* points in a shell of radius up to 1.3 around the origin, normally spread in direction. */
+std::vector<vec3> shell_points(const unsigned seed, const size_t n)
+{
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> gauss;
+  std::uniform_real_distribution<float> radius(0.0f, 1.3f);
+  std::vector<vec3> points(n);
+  for (vec3 &p : points) {
+    p = glm::normalize(vec3(gauss(rng), gauss(rng), gauss(rng))) * radius(rng);
+  }
+  return points;
+}
+
+/* find_contacts' answers for n points. */
+struct Contacts {
+  std::vector<uint8_t> hit;
+  std::vector<float> depth;
+  std::vector<vec3> normal, surface;
+
+  explicit Contacts(const size_t n) : hit(n), depth(n), normal(n), surface(n) {}
+  void find(const ColliderSet &set, const Span<vec3> points)
+  {
+    find_contacts(set, points, hit, depth, normal, surface);
+  }
+};
+
+void expect_same_bits(const Contacts &a, const Contacts &b)
+{
+  const size_t n = a.hit.size();
+  EXPECT_EQ(a.hit, b.hit);
+  EXPECT_EQ(std::memcmp(a.depth.data(), b.depth.data(), n * sizeof(float)), 0);
+  EXPECT_EQ(std::memcmp(a.normal.data(), b.normal.data(), n * sizeof(vec3)), 0);
+  EXPECT_EQ(std::memcmp(a.surface.data(), b.surface.data(), n * sizeof(vec3)), 0);
+}
+
+}  // namespace
+
+TEST(CollisionRobustness, BatchedQueryHasTheSameBitsOnOneAndTwoThreads)
+{
+  /* Many points in a shell around two overlapping spheres (a cylinder map and a sphere map),
+   * with a similarity placement and a sheared one (the two ways depth and normal are taken
+   * to world space): several parallel chunks and a partial last batch. Every answer equals the
+   * per-point query's, and one and two threads give the same bits. */
+  std::vector<vec3> points = shell_points(11, 3 * 4096 + 1000);
+  /* Points on the axes and poles of the maps. */
+  for (const float r : { 0.0f, 0.3f, 0.9f }) {
+    points.emplace_back(0.0f, r, 0.0f);
+    points.emplace_back(0.0f, -r, 0.0f);
+  }
+  for (const mat4 &m : similarity_and_shear()) {
     const auto a = sphere_collider(MapKind::Cylinder);
     const auto b = sphere_collider(MapKind::Sphere, 0.8f);
     a->set_transform(m);
@@ -227,20 +267,13 @@ TEST(CollisionRobustness, BatchedQueryHasTheSameBitsOnOneAndTwoThreads)
     set.add(a);
     set.add(b);
     const size_t n = points.size();
-    std::vector<uint8_t> hit[2] = { std::vector<uint8_t>(n), std::vector<uint8_t>(n) };
-    std::vector<float> depth[2] = { std::vector<float>(n), std::vector<float>(n) };
-    std::vector<vec3> normal[2] = { std::vector<vec3>(n), std::vector<vec3>(n) };
-    std::vector<vec3> surface[2] = { std::vector<vec3>(n), std::vector<vec3>(n) };
-    for (const int threads : { 1, 2 }) {
-      set_thread_num(threads);
-      const int r = threads - 1;
-      find_contacts(set, points, hit[r], depth[r], normal[r], surface[r]);
-    }
+    Contacts one(n), two(n);
+    set_thread_num(1);
+    one.find(set, points);
+    set_thread_num(2);
+    two.find(set, points);
     set_thread_num(0);
-    EXPECT_EQ(hit[0], hit[1]);
-    EXPECT_EQ(std::memcmp(depth[0].data(), depth[1].data(), n * sizeof(float)), 0);
-    EXPECT_EQ(std::memcmp(normal[0].data(), normal[1].data(), n * sizeof(vec3)), 0);
-    EXPECT_EQ(std::memcmp(surface[0].data(), surface[1].data(), n * sizeof(vec3)), 0);
+    expect_same_bits(one, two);
     const int64_t hits = check_queries(set, points);
     EXPECT_GT(hits, int64_t(n / 4));
     EXPECT_LT(hits, int64_t(n));
@@ -283,13 +316,9 @@ TEST(CollisionRobustness, BatchedQueryHasTheSameBitsWithAndWithoutAvx2)
   if (!collision_avx2_available()) {
     GTEST_SKIP() << "the CPU has no AVX2";
   }
+  std::vector<vec3> points = shell_points(5, 2 * 4096 + 777);
   std::mt19937 rng(5);
   std::normal_distribution<float> gauss;
-  std::uniform_real_distribution<float> radius(0.0f, 1.3f);
-  std::vector<vec3> points(2 * 4096 + 777);
-  for (vec3 &p : points) {
-    p = glm::normalize(vec3(gauss(rng), gauss(rng), gauss(rng))) * radius(rng);
-  }
   for (int k = 0; k < 200; k++) {
     /* Near the poles (φ within half a row) and near θ = 0 from both sides (the wrap). */
     const float r = 0.5f + 0.005f * float(k);
@@ -299,12 +328,6 @@ TEST(CollisionRobustness, BatchedQueryHasTheSameBitsWithAndWithoutAvx2)
   }
   const std::vector<vec3> hostile = hostile_points(1.0f);
   points.insert(points.end(), hostile.begin(), hostile.end());
-  mat4 shear(1.0f);
-  shear[1][0] = 0.3f;
-  const mat4 similarity =
-      glm::scale(glm::rotate(glm::translate(mat4(1.0f), vec3(0.1f, -0.2f, 0.05f)), 0.7f,
-                             glm::normalize(vec3(1, 2, 3))),
-                 vec3(1.2f));
   const TestMesh capsule = closed_cylinder(0.6f, 1.6f, 20, 8);
   std::vector<int32_t> part_vertices, part_offsets = { 0 };
   for (const float y_cut : { -0.1f, 0.1f }) {
@@ -319,7 +342,7 @@ TEST(CollisionRobustness, BatchedQueryHasTheSameBitsWithAndWithoutAvx2)
   }
   const bool avx2_was_used = collision_avx2_used();
   for (const MapKind kind : { MapKind::Cylinder, MapKind::Sphere }) {
-    for (const mat4 &m : { similarity, shear }) {
+    for (const mat4 &m : similarity_and_shear()) {
       CollisionParams params;
       params.map_kind = kind;
       const auto parts = std::make_shared<Collider>(
@@ -331,21 +354,16 @@ TEST(CollisionRobustness, BatchedQueryHasTheSameBitsWithAndWithoutAvx2)
       set.add(sphere);
       set.add(parts);
       const size_t n = points.size();
-      std::vector<uint8_t> hit[2] = { std::vector<uint8_t>(n), std::vector<uint8_t>(n) };
-      std::vector<float> depth[2] = { std::vector<float>(n), std::vector<float>(n) };
-      std::vector<vec3> normal[2] = { std::vector<vec3>(n), std::vector<vec3>(n) };
-      std::vector<vec3> surface[2] = { std::vector<vec3>(n), std::vector<vec3>(n) };
-      for (const int avx2 : { 0, 1 }) {
-        set_collision_avx2(avx2 != 0);
-        EXPECT_EQ(collision_avx2_used(), avx2 != 0);
-        find_contacts(set, points, hit[avx2], depth[avx2], normal[avx2], surface[avx2]);
-      }
+      Contacts baseline(n), avx2(n);
+      set_collision_avx2(false);
+      EXPECT_FALSE(collision_avx2_used());
+      baseline.find(set, points);
+      set_collision_avx2(true);
+      EXPECT_TRUE(collision_avx2_used());
+      avx2.find(set, points);
       set_collision_avx2(avx2_was_used);
-      EXPECT_EQ(hit[0], hit[1]);
-      EXPECT_EQ(std::memcmp(depth[0].data(), depth[1].data(), n * sizeof(float)), 0);
-      EXPECT_EQ(std::memcmp(normal[0].data(), normal[1].data(), n * sizeof(vec3)), 0);
-      EXPECT_EQ(std::memcmp(surface[0].data(), surface[1].data(), n * sizeof(vec3)), 0);
-      const int64_t hits = std::count(hit[0].begin(), hit[0].end(), uint8_t(1));
+      expect_same_bits(baseline, avx2);
+      const int64_t hits = std::count(baseline.hit.begin(), baseline.hit.end(), uint8_t(1));
       EXPECT_GT(hits, int64_t(n / 4));
       EXPECT_LT(hits, int64_t(n));
     }
