@@ -66,7 +66,8 @@ void smooth(const Span<vec3> points, const float cell, const int radius, const f
   bin_points(grid, points, bins);
   VelocityGrids grids;
   smooth_grid_velocity(grid, bins, velocities, radius, grids);
-  drag_toward(grid, bins, grids, strength, {}, velocities);
+  std::vector<vec3> positions(points.begin(), points.end());
+  drag_toward(grid, bins, grids, strength, 0.01f, {}, positions, velocities);
 }
 
 }  // namespace

@@ -55,12 +55,14 @@ void smooth_grid_velocity(const GridFrame &grid, const PointBins &bins,
 }
 
 void drag_toward(const GridFrame &grid, const PointBins &bins, const VelocityGrids &grids,
-                 const float strength, const Span<int32_t> curve_offsets,
-                 const MutableSpan<vec3> velocities)
+                 const float strength, const float h, const Span<int32_t> curve_offsets,
+                 const MutableSpan<vec3> positions, const MutableSpan<vec3> velocities)
 {
   for_each_free_point(curve_offsets, velocities.size(), [&](const int64_t i) {
     const vec3 v = velocities[i];
-    velocities[i] = v + strength * (grid_velocity_at(grid, grids, bins, i, v) - v);
+    const vec3 dv = strength * (grid_velocity_at(grid, grids, bins, i, v) - v);
+    velocities[i] = v + dv;
+    positions[i] += h * dv;
   });
 }
 

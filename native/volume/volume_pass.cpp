@@ -81,8 +81,8 @@ void VolumePass::apply(const SubstepState &state)
   if (params_.smoothing > 0.0f) {
     smooth_grid_velocity(grid, bins_, state.velocities_wo, params_.filter_radius,
                          velocity_grids_);
-    drag_toward(grid, bins_, velocity_grids_, params_.smoothing, state.curve_offsets,
-                state.velocities_wo);
+    drag_toward(grid, bins_, velocity_grids_, params_.smoothing, state.h, state.curve_offsets,
+                state.positions_wo, state.velocities_wo);
     density_max_ = velocity_grids_.density_max;
   }
   else {
@@ -92,11 +92,12 @@ void VolumePass::apply(const SubstepState &state)
     density_max_ = max_value(density);
   }
 
-  /* §5.2: the density force toward the target, coarse to fine. Unlike the drag, it also moves
-   * the nodes by h Δv within this substep, as symplectic Euler applies a force: directing
-   * must reach the target shape even where stiff hinge damping takes the velocity back (the
-   * Kurihara 1993 model), and only this option pays for the take-back of moved nodes. */
+  /* §5.2: the density force toward the target, coarse to fine; it moves the nodes by h Δv as
+   * the drag does. */
   if (has_target() && params_.target_strength > 0.0f) {
+    if (params_.smoothing > 0.0f) {
+      head_box(state.positions_wo, world_to_head, positions_head_); /* the drag moved them */
+    }
     HeadBox box = hair_box;
     box.include(target_.box());
     /* The error on the finest grid, of the state before the targeting force. */
