@@ -25,12 +25,12 @@ inline vec3 transform_point(const mat4 &m, const vec3 &p)
   return vec3(m * vec4(p, 1.0f));
 }
 
-/* atan2(y, x) in float without a library call, within 3e-7 rad of the exact angle (tested; a float ulp
- * at π is 2.4e-7): the
- * octant reduction to [0, 1], then atan(a) = π/4 + atan((a − 1)/(a + 1)) above tan(π/8) and
- * the degree-9 odd polynomial of Cephes' atanf on |t| ≤ tan(π/8) (Moshier 1989, "Methods and
- * Programs for Mathematical Functions", atanf.c). Signs and zeros as std::atan2 gives them;
- * NaN in, NaN out. Branch-free, so the compiler keeps it in registers in a strand's loop. */
+/* atan2(y, x) in float without a library call, within 3e-7 rad of the exact angle (tested; a
+ * float ulp at π is 2.4e-7): the octant reduction to [0, 1], then atan(a) = π/4 +
+ * atan((a − 1)/(a + 1)) above tan(π/8), and the degree-9 odd polynomial of Cephes' atanf on
+ * |t| ≤ tan(π/8) (Moshier 1989, "Methods and Programs for Mathematical Functions", atanf.c).
+ * Signs and zeros as std::atan2 gives them; NaN in, NaN out. Branch-free, so the compiler keeps
+ * it in registers in a strand's loop. */
 inline float atan2_fast(const float y, const float x)
 {
   const float ax = std::fabs(x), ay = std::fabs(y);
