@@ -63,7 +63,7 @@ DensityTarget::DensityTarget(const Span<vec3> positions_wo, const mat4 &head_to_
   box_ = head_box(positions_head_, mat4(1.0f));
 }
 
-void DensityTarget::density_on(const GridFrame &grid, const MutableSpan<float> r_density)
+float DensityTarget::density_on(const GridFrame &grid, const MutableSpan<float> r_density)
 {
   Level *level = nullptr;
   for (Level &candidate : levels_) {
@@ -81,8 +81,16 @@ void DensityTarget::density_on(const GridFrame &grid, const MutableSpan<float> r
     level->density.resize(size_t(level->grid.vertices_num()));
     std::vector<float> scratch;
     splat_density(level->grid, bins, level->density, scratch);
+    double sum = 0.0;
+    int64_t reached = 0;
+    for (const float d : level->density) {
+      sum += double(d);
+      reached += d > 0.0f ? 1 : 0;
+    }
+    level->mean = reached > 0 ? float(sum / double(reached)) : 1.0f;
   }
   copy_between_grids(level->grid, level->density, grid, r_density);
+  return level->mean;
 }
 
 double target_error(const GridFrame &grid, const PointBins &bins, DensityTarget &target,
@@ -93,7 +101,7 @@ double target_error(const GridFrame &grid, const PointBins &bins, DensityTarget 
   grids.target.resize(vertices_num);
   grids.difference.resize(vertices_num);
   splat_density(grid, bins, grids.density, grids.scratch);
-  target.density_on(grid, grids.target);
+  grids.target_mean = target.density_on(grid, grids.target);
   return density_difference(grids.density, grids.target, grids.difference);
 }
 

@@ -41,13 +41,15 @@ class DensityTarget {
   bool is_empty() const { return positions_head_.empty(); }
   const HeadBox &box() const { return box_; }
   /* D_t on `grid`'s vertices (the target's density on the lattice of grid.cell_size, which is
-   * computed once per cell size and kept). */
-  void density_on(const GridFrame &grid, MutableSpan<float> r_density);
+   * computed once per cell size and kept); returns D̄_t, its mean over the vertices it
+   * reaches (1 when it reaches none). */
+  float density_on(const GridFrame &grid, MutableSpan<float> r_density);
 
  private:
   struct Level {
     GridFrame grid;
     std::vector<float> density;
+    float mean = 1.0f;
   };
   std::vector<vec3> positions_head_;
   HeadBox box_;
@@ -60,6 +62,7 @@ struct TargetGrids {
   std::vector<float> target;
   std::vector<float> difference;
   std::vector<float> scratch;
+  float target_mean = 1.0f; /* D̄_t (DensityTarget::density_on) */
 };
 
 /* E of eq. 3 between `positions_wo` (binned on `grid` in `bins`) and `target`; leaves D_s,
