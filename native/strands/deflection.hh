@@ -36,31 +36,47 @@ struct Deflection {
   }
 };
 
-/* The angles (θ, φ) that point a segment along the unit `direction` in `chart`. */
-inline glm::vec2 chart_angles(const mat3 &chart, const vec3 &direction)
+/* `angle` plus the multiple of 2π that brings it nearest `near`. */
+inline float unwrap_near(const float angle, const float near)
 {
-  const vec3 local = glm::transpose(chart) * direction;
-  return glm::vec2(std::asin(glm::clamp(local.x, -1.0f, 1.0f)), std::atan2(local.y, local.z));
+  constexpr float two_pi = 6.28318531f;
+  return angle + two_pi * std::nearbyint((near - angle) * (1.0f / two_pi));
 }
 
 /* The deflection that points a segment along `direction` (any length but zero) in `chart`,
- * and its angles in r_angles. The sines and cosines are the direction's own components in
- * the chart, d = (sin θ, cos θ sin φ, cos θ cos φ), so no sine or cosine is evaluated; θ and
- * φ take one atan2_fast each (θ ∈ [−π/2, π/2], as asin gives it). */
+ * and its angles in r_angles, chosen continuous with the angles r_angles holds on entry.
+ *
+ * The sines and cosines are the direction's own components in the chart,
+ * d = (sin θ, cos θ sin φ, cos θ cos φ), so no sine or cosine is evaluated; θ and φ take one
+ * atan2_fast each. Every direction has two readings, (θ, φ) and (π − θ, φ + π), each up to
+ * whole turns; the hinge's angles are not bounded (a limp hinge turns past the chart's pole),
+ * so the reading nearest the current angles is kept. Another reading would turn the meaning
+ * of the hinge's rates (θ̇ reverses on the other one) and its spring's angle (a whole turn of
+ * k q) under the segment without moving it: energy from nowhere each time a pass moves it. */
 inline Deflection chart_deflection(const mat3 &chart, const vec3 &direction, glm::vec2 &r_angles)
 {
   const vec3 local = glm::transpose(chart) * direction;
   const float across = std::sqrt(local.y * local.y + local.z * local.z); /* |cos θ| · |d| */
   const float inv_length = 1.0f / std::sqrt(local.x * local.x + across * across);
-  r_angles = glm::vec2(atan2_fast(local.x, across), atan2_fast(local.y, local.z));
-  if (!(across > 0.0f)) {
-    /* At the chart's pole φ is undefined: atan2 of the zeros chose it. */
-    return Deflection(vec4(local.x * inv_length, 0.0f, std::sin(r_angles.y),
-                           std::cos(r_angles.y)));
+  const glm::vec2 near = r_angles;
+  const glm::vec2 principal(atan2_fast(local.x, across), atan2_fast(local.y, local.z));
+  /* At the chart's pole φ is undefined: atan2 of the zeros chose it. */
+  const Deflection deflection =
+      across > 0.0f ? Deflection(vec4(local.x * inv_length, across * inv_length,
+                                      local.y / across, local.z / across)) :
+                      Deflection(vec4(local.x * inv_length, 0.0f, std::sin(principal.y),
+                                      std::cos(principal.y)));
+  const glm::vec2 first(unwrap_near(principal.x, near.x), unwrap_near(principal.y, near.y));
+  const glm::vec2 second(unwrap_near(3.14159265f - principal.x, near.x),
+                         unwrap_near(principal.y + 3.14159265f, near.y));
+  const glm::vec2 a = first - near, b = second - near;
+  if (glm::dot(b, b) < glm::dot(a, a)) {
+    r_angles = second;
+    return Deflection(vec4(deflection.sin_theta, -deflection.cos_theta, -deflection.sin_phi,
+                           -deflection.cos_phi));
   }
-  const float inv_across = 1.0f / across;
-  return Deflection(vec4(local.x * inv_length, across * inv_length, local.y * inv_across,
-                         local.z * inv_across));
+  r_angles = first;
+  return deflection;
 }
 
 }  // namespace hairdyn

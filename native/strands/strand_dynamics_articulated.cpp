@@ -439,11 +439,10 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
   for (size_t i = first; i < end; i++) {
     const float d = rest_lengths_[i];
     const mat3 chart = frame * rest_rotations_[i];
-    if (keep_direction) {
-      angles_[i] = chart_angles(chart, kept_direction);
-      keep_direction = false;
-    }
-    Deflection deflection(angles_[i]);
+    Deflection deflection = keep_direction ?
+                                chart_deflection(chart, kept_direction, angles_[i]) :
+                                Deflection(angles_[i]);
+    keep_direction = false;
     frame = deflection.rotate(chart);
     vec3 tip = node + d * frame[2];
     const vec2 rate = angular_velocities_[i];

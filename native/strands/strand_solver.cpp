@@ -346,12 +346,12 @@ bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec
        * the articulated chain run away. The reaction constraint pushes it out instead. */
       break;
     }
-    angles = chart_angles(chart, glm::normalize(swing_onto_plane(node, tip, d, contact) - node));
+    const vec3 along = swing_onto_plane(node, tip, d, contact) - node;
     omega = vec2(0.0f);
     if (r_normal != nullptr) {
       *r_normal = contact.normal_wo;
     }
-    tip = node + d * Deflection(angles).rotate(chart)[2];
+    tip = node + d * chart_deflection(chart, along, angles).rotate(chart)[2];
     moved = true;
   }
   return moved;
