@@ -132,6 +132,7 @@ struct SheetsResult {
   float tip_drop = 0.0f;      /* m, how far sheet A's tips fell on average */
   int64_t diverged = 0;       /* strands the solver reported diverged, over the frames */
   float worst_stretch = 0.0f; /* the largest |length − rest length| / rest length of a segment */
+  float fastest = 0.0f;       /* m/s, the fastest node at the end of any frame */
 };
 
 inline Groom crossing_sheets_groom(const StrandModel model, const CrossingSheets &scene)
@@ -176,6 +177,9 @@ inline SheetsResult run_crossing_sheets(const StrandModel model, SubstepPass *pa
     const std::vector<vec3> after(solver.positions().begin(), solver.positions().end());
     result.crossings +=
         count_sheet_crossings(groom, scene.strands_per_sheet, before, after, 0.02f);
+    for (const vec3 &v : solver.velocities()) {
+      result.fastest = std::max(result.fastest, glm::length(v));
+    }
     for (size_t c = 0; c + 1 < groom.offsets.size(); c++) {
       for (int32_t p = groom.offsets[c] + 1; p < groom.offsets[c + 1]; p++) {
         const float rest =

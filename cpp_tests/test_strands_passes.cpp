@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <utility>
 
 #include "collision/collider.hh"
 #include "collision_test_shapes.hh"
@@ -130,44 +131,121 @@ TEST(StrandsPasses, ADivergedStrandKeepsItsRestShapeWhateverThePassesDo)
   }
 }
 
+namespace {
+
+/* A straight strand of 10 segments of 2 cm hanging along −Z, limp, with no forces at all. */
+std::unique_ptr<StrandSolver> forceless_strand(const StrandModel model)
+{
+  std::vector<int32_t> offsets{ 0, 11 };
+  std::vector<vec3> positions;
+  for (int i = 0; i <= 10; i++) {
+    positions.push_back(vec3(0.0f, 0.0f, -0.02f * float(i)));
+  }
+  StrandParams params;
+  params.model = model;
+  params.youngs_modulus = 1e3f; /* limp */
+  params.bending_damping = 0.0f;
+  params.k_theta = params.k_phi = 1e-12f;
+  params.damping = 0.0f;
+  params.gravity = vec3(0.0f);
+  params.air_drag = 0.0f;
+  params.form_drag = 0.0f;
+  params.substeps = 1;
+  return std::make_unique<StrandSolver>(offsets, positions, mat4(1.0f), Span<vec3>(), params);
+}
+
+/* The nodes' velocities over a short step with nothing acting (finite differences). */
+std::vector<vec3> velocities_over_short_step(StrandSolver &solver)
+{
+  const std::vector<vec3> before(solver.positions().begin(), solver.positions().end());
+  const float dt = 1e-4f;
+  solver.step(dt, mat4(1.0f));
+  std::vector<vec3> velocities;
+  for (size_t i = 0; i < before.size(); i++) {
+    velocities.push_back((solver.positions()[i] - before[i]) / dt);
+  }
+  return velocities;
+}
+
+/* Once, at the first substep it sees: halves every node's velocity (a braking correction). */
+class HalvePass : public SubstepPass {
+ public:
+  const char *name() const override { return "halve"; }
+  void apply(const SubstepState &state) override
+  {
+    if (!std::exchange(done_, true)) {
+      for (vec3 &v : state.velocities_wo) {
+        v *= 0.5f;
+      }
+    }
+  }
+
+ private:
+  bool done_ = false;
+};
+
+}  // namespace
+
 TEST(StrandsPasses, AVelocityCorrectionComesBackAsThatVelocity)
 {
   /* A pass gives every node of a straight, limp strand at rest the same velocity. The hinge
    * rates are relative to the parent segment, which carries the rest of the strand: the
    * first hinge alone turns the strand, the others must turn back so that each node moves at
    * the velocity the pass gave, not the tip n times as fast. Measured over a short step with
-   * no forces, in both models. */
-  std::vector<int32_t> offsets{ 0, 11 };
-  std::vector<vec3> positions;
-  for (int i = 0; i <= 10; i++) {
-    positions.push_back(vec3(0.0f, 0.0f, -0.02f * float(i)));
-  }
+   * no forces. The articulated model only: Kurihara 1993's hinges are only ever slowed by a
+   * pass (next test). */
   const vec3 delta_v(0.1f, 0.05f, 0.0f);
-  for (const StrandModel model : { StrandModel::Articulated, StrandModel::Kurihara1993 }) {
-    StrandParams params;
-    params.model = model;
-    params.youngs_modulus = 1e3f; /* limp */
-    params.bending_damping = 0.0f;
-    params.k_theta = params.k_phi = 1e-12f;
-    params.damping = 0.0f;
-    params.gravity = vec3(0.0f);
-    params.air_drag = 0.0f;
-    params.form_drag = 0.0f;
-    params.substeps = 1;
-    StrandSolver solver(offsets, positions, mat4(1.0f), {}, params);
-    KickPass kick(delta_v);
-    solver.add_pass(&kick);
-    solver.step(1e-3f, mat4(1.0f));
-    const std::vector<vec3> before(solver.positions().begin(), solver.positions().end());
-    const float dt = 1e-4f;
-    solver.step(dt, mat4(1.0f));
-    for (int i = 1; i <= 10; i++) {
-      const vec3 velocity = (solver.positions()[i] - before[size_t(i)]) / dt;
-      EXPECT_LT(glm::length(velocity - delta_v), 0.03f * glm::length(delta_v))
-          << "model " << int(model) << ", node " << i << " moves at (" << velocity.x << ", "
-          << velocity.y << ", " << velocity.z << ")";
-    }
+  const std::unique_ptr<StrandSolver> solver = forceless_strand(StrandModel::Articulated);
+  KickPass kick(delta_v);
+  solver->add_pass(&kick);
+  solver->step(1e-3f, mat4(1.0f));
+  const std::vector<vec3> velocities = velocities_over_short_step(*solver);
+  for (int i = 1; i <= 10; i++) {
+    EXPECT_LT(glm::length(velocities[size_t(i)] - delta_v), 0.03f * glm::length(delta_v))
+        << "node " << i << " moves at (" << velocities[size_t(i)].x << ", "
+        << velocities[size_t(i)].y << ", " << velocities[size_t(i)].z << ")";
   }
+}
+
+TEST(StrandsPasses, KuriharaHingesAreOnlySlowedByAPass)
+{
+  /* Kurihara 1993's model: a braking correction comes back whole, and a kick of a strand at
+   * rest moves its nodes (positions come back whole) but sets none of its hinges turning. */
+  const int64_t points_num = 11;
+  std::vector<vec2> angles(size_t(points_num), vec2(0.0f));
+  std::vector<vec2> rates(size_t(points_num), vec2(3.0f, -2.0f)); /* rad/s, every hinge */
+  /* The strand curls at these rates; halving every node's velocity halves them. */
+  const std::unique_ptr<StrandSolver> free = forceless_strand(StrandModel::Kurihara1993);
+  const std::unique_ptr<StrandSolver> braked = forceless_strand(StrandModel::Kurihara1993);
+  free->set_curve_state(0, angles, rates);
+  braked->set_curve_state(0, angles, rates);
+  HalvePass halve;
+  braked->add_pass(&halve);
+  braked->step(1e-4f, mat4(1.0f));
+  free->step(1e-4f, mat4(1.0f));
+  const std::vector<vec3> free_velocities = velocities_over_short_step(*free);
+  const std::vector<vec3> braked_velocities = velocities_over_short_step(*braked);
+  for (int i = 1; i < points_num; i++) {
+    const vec3 expected = 0.5f * free_velocities[size_t(i)];
+    EXPECT_LT(glm::length(braked_velocities[size_t(i)] - expected), 0.03f * glm::length(expected))
+        << "node " << i;
+    EXPECT_NEAR(braked->angular_velocities()[i].x, 1.5f, 1e-3f) << "hinge " << i;
+    EXPECT_NEAR(braked->angular_velocities()[i].y, -1.0f, 1e-3f) << "hinge " << i;
+  }
+
+  const vec3 delta_v(0.1f, 0.05f, 0.0f);
+  const std::unique_ptr<StrandSolver> resting = forceless_strand(StrandModel::Kurihara1993);
+  const std::vector<vec3> rest(resting->positions().begin(), resting->positions().end());
+  KickPass kick(delta_v);
+  resting->add_pass(&kick);
+  const float h = 1e-3f;
+  resting->step(h, mat4(1.0f));
+  for (int i = 1; i < points_num; i++) {
+    EXPECT_EQ(resting->angular_velocities()[i], vec2(0.0f)) << "hinge " << i;
+  }
+  /* The kick's move, h Δv, kept with the segment lengths: the first segment turns toward it. */
+  EXPECT_GT(glm::dot(resting->positions()[1] - rest[1], delta_v),
+            0.5f * h * glm::dot(delta_v, delta_v));
 }
 
 TEST(StrandsPasses, APushOfAFewMetresPerSecondDoesNotRunAway)

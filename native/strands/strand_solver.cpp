@@ -38,6 +38,14 @@ vec3 swing_onto_plane(const vec3 &root, const vec3 &tip, const float d, const Co
   return foot + (std::sqrt(d * d - height * height) / along_length) * along;
 }
 
+/* The part of a change δ of a hinge's rates ω = (θ̇, φ̇) that only slows them: each moves
+ * toward zero by at most its own size, never past it (see take_back_strand). */
+vec2 slowing_part(const vec2 &omega, const vec2 &delta)
+{
+  const vec2 low = glm::min(omega, vec2(0.0f)), high = glm::max(omega, vec2(0.0f));
+  return glm::clamp(omega + delta, low, high) - omega;
+}
+
 mat4 pose_matrix(const HeadPose &pose)
 {
   return glm::translate(mat4(1.0f), pose.translation) * glm::mat4_cast(pose.rotation) *
@@ -442,7 +450,17 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
    * (Taking Δv_i − Δv_{i-1} instead gives a pass's uniform push to the first hinge and again
    * to every hinge below it: the tip of a strand of n segments would move n times as fast.)
    * The along-segment part of a change, which no rate can give, is dropped and not passed on.
-   * A strand the passes left alone keeps its bits. */
+   * A strand the passes left alone keeps its bits.
+   *
+   * In Kurihara 1993's model a pass may only slow a hinge: each of its rates moves toward zero,
+   * never past it, and never grows. Its hinges are independent oscillators (eq. 1), each with
+   * its own segment's inertia whatever it carries, so the exact rates of a local change (the
+   * hinge beside it turning, the hinges below turning back to keep their nodes in place, a φ̇
+   * of 1 / cos θ times the speed near the chart's pole) are not kept in balance by its step:
+   * strands pushed by hair–hair collision every substep gained energy until they ran away
+   * (9–13 of 24–28 limp strands over 40 frames of the two-sheet scene). Slowing-only changes
+   * take energy out of eq. 1's oscillators and never put it in. The positions a pass gives
+   * come back whole, so a pass still moves a strand. */
   const IndexRange points = curve_points(curve_offsets_, curve);
   const size_t root = size_t(points.start);
   mat3 frame = substep.rotation * root_frames_head_[size_t(curve)];
@@ -470,8 +488,12 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
       const vec3 own = (delta_v - carried) / d;
       /* Δφ̇ = (own · e_φ) / cos θ; at the chart's pole φ is undefined and takes nothing. */
       const float c = deflection.cos_theta;
-      const float along_phi = c > 1e-3f ? glm::dot(own, frame[1]) : 0.0f;
-      const vec2 delta_rate(glm::dot(own, frame[0]), c > 1e-3f ? along_phi / c : 0.0f);
+      float along_phi = c > 1e-3f ? glm::dot(own, frame[1]) : 0.0f;
+      vec2 delta_rate(glm::dot(own, frame[0]), c > 1e-3f ? along_phi / c : 0.0f);
+      if (params_.model == StrandModel::Kurihara1993) {
+        delta_rate = slowing_part(angular_velocities_[i], delta_rate);
+        along_phi = c * delta_rate.y;
+      }
       angular_velocities_[i] += delta_rate;
       parent_delta_omega += delta_rate.x * frame[1] - delta_rate.y * chart[0];
       parent_delta_v = carried + d * (delta_rate.x * frame[0] + along_phi * frame[1]);
