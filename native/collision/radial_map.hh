@@ -101,20 +101,20 @@ template<int64_t N> struct MapBatch {
 /* compact_defined's loop eight points at a time (left-packed by a permutation), from point
  * r_k and slot r_n on: advances both past the last whole group of eight. */
 __attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_size> &b,
-                                                          bool carry_v, int64_t &r_n,
-                                                          int64_t &r_k);
+                                                          int64_t &r_n, int64_t &r_k);
 /* expand_defined's loop for the groups compact_defined_avx2 packed. */
 __attribute__((target("avx2"))) void expand_defined_avx2(MapBatch<map_batch_size> &b);
 #endif
 
 /* A batch in which few points can be inside (the others are beyond the map's largest radius
  * or outside its height range: the shell of a query around a collider, most of a groom) looks
- * up only those. compact_defined moves them to the front of the batch (x, y, z, r_p and, with
- * carry_v, v), the stages run on them alone, and expand_defined moves their results back
- * (valid, inside, depth, N, and x, y, z); the other points are left not valid. A point's
- * operations are the same either way, only which lane runs them changes. Returns false (and
- * leaves the batch as it is) when more than 3/4 of the points are defined. */
-template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
+ * up only those. compact_defined moves them to the front of the batch (x, y, z: the maps take
+ * square roots only after it, for the points kept), the stages run on them alone, and
+ * expand_defined moves their results back (valid, inside, depth, N, and x, y, z); the other
+ * points are left not valid. A point's operations are the same either way, only which lane
+ * runs them changes. Returns false (and leaves the batch as it is) when more than 3/4 of the
+ * points are defined. */
+template<int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
 {
   int32_t defined_num = 0;
   for (int64_t k = 0; k < b.size; k++) {
@@ -129,7 +129,7 @@ template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapB
 #if defined(HAIRDYN_BLEND_AVX2)
   if constexpr (N == map_batch_size) {
     if (b.avx2) {
-      compact_defined_avx2(b, carry_v, n, k);
+      compact_defined_avx2(b, n, k);
     }
   }
 #endif
@@ -138,10 +138,6 @@ template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapB
     b.x[n] = b.x[k];
     b.y[n] = b.y[k];
     b.z[n] = b.z[k];
-    b.r_p[n] = b.r_p[k];
-    if constexpr (carry_v) {
-      b.v[n] = b.v[k];
-    }
     n += b.defined[k];
   }
   b.full_size = b.size;
