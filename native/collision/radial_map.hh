@@ -88,10 +88,10 @@ template<int64_t N> struct MapBatch {
   float w00[N], w10[N], w01[N], w11[N];
   /* Blend with AVX2 (RadialTable::blend_avx2): set by the caller when the CPU has it. */
   bool avx2 = false;
-  /* While compacted (compact_defined): the batch's size before, and where each point was;
-   * with AVX2, which of each group of eight points were kept, for how many points and slots
-   * (compact_defined_avx2). */
-  int64_t full_size = 0;
+  /* While compacted (compact_defined): the batch's size before, the points kept (size is
+   * that rounded up to a multiple of 8), and where each point was; with AVX2, which of each
+   * group of eight points were kept, for how many points and slots (compact_defined_avx2). */
+  int64_t full_size = 0, kept_size = 0;
   int32_t index[N];
   uint8_t group_masks[N / 8 + 1];
   int64_t packed_points = 0, packed_slots = 0;
@@ -140,9 +140,20 @@ template<int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
     b.z[n] = b.z[k];
     n += b.defined[k];
   }
+  /* Whole groups of eight, the last filled with copies of the last point kept: the stages'
+   * vector loops then run no remainder (scalar or half width, with branches that cannot be
+   * predicted), and the copies' results are never read. */
+  static_assert(N % 8 == 0, "a compacted batch is padded to groups of eight");
+  const int64_t padded = (n + 7) & ~int64_t(7);
+  for (int64_t j = n; j < padded; j++) {
+    b.x[j] = b.x[n - 1];
+    b.y[j] = b.y[n - 1];
+    b.z[j] = b.z[n - 1];
+  }
   b.full_size = b.size;
-  b.size = n;
-  for (int64_t j = 0; j < n; j++) {
+  b.kept_size = n;
+  b.size = padded;
+  for (int64_t j = 0; j < padded; j++) {
     b.defined[j] = 1;
   }
   return true;
@@ -150,7 +161,7 @@ template<int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
 
 template<int64_t N> HAIRDYN_BATCH_INLINE void expand_defined(MapBatch<N> &b)
 {
-  const int64_t n = b.size;
+  const int64_t n = b.kept_size;
   /* valid and inside kept aside (in c00, read by no later stage), then cleared everywhere. */
   for (int64_t j = 0; j < n; j++) {
     b.c00[j] = uint32_t(b.valid[j] | (b.inside[j] << 1));
