@@ -162,21 +162,25 @@ template<int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
 template<int64_t N> HAIRDYN_BATCH_INLINE void expand_defined(MapBatch<N> &b)
 {
   const int64_t n = b.kept_size;
-  /* valid and inside kept aside (in c00, read by no later stage), then cleared everywhere. */
+  /* With AVX2, the slots and points compact_defined_avx2 packed are moved back by
+   * expand_defined_avx2 (which writes valid and inside of all its points). */
+  int64_t j_end = 0, k_start = 0;
+#if defined(HAIRDYN_BLEND_AVX2)
+  if constexpr (N == map_batch_size) {
+    j_end = b.avx2 ? b.packed_slots : 0;
+    k_start = b.avx2 ? b.packed_points : 0;
+  }
+#endif
+  /* valid and inside kept aside (in c00, read by no later stage), then cleared for the
+   * points below. */
   for (int64_t j = 0; j < n; j++) {
     b.c00[j] = uint32_t(b.valid[j] | (b.inside[j] << 1));
   }
-  for (int64_t k = 0; k < b.full_size; k++) {
+  for (int64_t k = k_start; k < b.full_size; k++) {
     b.valid[k] = 0;
     b.inside[k] = 0;
   }
   /* Backward, in place: index[j] >= j, and the slots below j are still to be read. */
-  int64_t j_end = 0;
-#if defined(HAIRDYN_BLEND_AVX2)
-  if constexpr (N == map_batch_size) {
-    j_end = b.avx2 ? b.packed_slots : 0;
-  }
-#endif
   for (int64_t j = n - 1; j >= j_end; j--) {
     const int64_t k = b.index[j];
     b.valid[k] = int32_t(b.c00[j] & 1u);
