@@ -69,13 +69,11 @@ class SphereMap {
       b.r_p[k] = std::sqrt(rho_xz_sq + y * y);
       b.v[k] = std::sqrt(rho_xz_sq);
     }
-    /* θ around the pole axis, φ from it. */
+    /* φ from the pole axis and θ around it, in one loop. */
     for (int64_t k = 0; k < b.size; k++) {
       const float v = fast_atan2(b.v[k], b.y[k]) * v_per_radian - 0.5f;
       b.v[k] = v;
       any_near_pole |= (v < 0.0f ? 1 : 0) | (v > v_last ? 1 : 0);
-    }
-    for (int64_t k = 0; k < b.size; k++) {
       b.u[k] = fast_atan2(b.z[k], b.x[k]) * u_per_radian;
     }
     for (int64_t k = 0; k < b.size; k++) {
