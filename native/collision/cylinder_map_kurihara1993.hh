@@ -54,17 +54,20 @@ class CylinderMap {
     const float u_per_radian = u_per_radian_, v_per_unit = v_per_unit_;
     /* Short loops, one step each (see MapBatch). */
     for (int64_t k = 0; k < b.size; k++) {
-      /* (r_p, θ_p, y_p) of P; outside the height range or beyond the largest radius P is
-       * never inside. */
+      /* Outside the height range or beyond the largest radius P is never inside (compared
+       * squared: the square root is taken only for the points looked up). */
       const float x = b.x[k], y = b.y[k], z = b.z[k];
       const float r_sq = x * x + z * z;
-      b.r_p[k] = std::sqrt(r_sq);
       b.defined[k] = (y >= y_min ? 1 : 0) & (y <= y_max ? 1 : 0) &
                      (inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1);
     }
     bool compacted = false;
     if constexpr (inside_only && N > 1) {
-      compacted = compact_defined<false>(b);
+      compacted = compact_defined(b);
+    }
+    /* (r_p, θ_p, y_p) of P. */
+    for (int64_t k = 0; k < b.size; k++) {
+      b.r_p[k] = std::sqrt(b.x[k] * b.x[k] + b.z[k] * b.z[k]);
     }
     for (int64_t k = 0; k < b.size; k++) {
       b.u[k] = fast_atan2(b.z[k], b.x[k]) * u_per_radian;

@@ -230,8 +230,7 @@ __attribute__((target("avx2"))) inline void pack_floats(float *values, const int
 }  // namespace
 
 __attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_size> &b,
-                                                          const bool carry_v, int64_t &r_n,
-                                                          int64_t &r_k)
+                                                          int64_t &r_n, int64_t &r_k)
 {
   int64_t n = r_n, k = r_k;
   const __m256i zero = _mm256_setzero_si256();
@@ -249,10 +248,6 @@ __attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_siz
     pack_floats(b.x, n, k, lanes);
     pack_floats(b.y, n, k, lanes);
     pack_floats(b.z, n, k, lanes);
-    pack_floats(b.r_p, n, k, lanes);
-    if (carry_v) {
-      pack_floats(b.v, n, k, lanes);
-    }
     b.group_masks[k / 8] = uint8_t(mask);
     n += left_pack.count[mask];
   }

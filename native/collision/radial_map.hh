@@ -88,10 +88,10 @@ template<int64_t N> struct MapBatch {
   float w00[N], w10[N], w01[N], w11[N];
   /* Blend with AVX2 (RadialTable::blend_avx2): set by the caller when the CPU has it. */
   bool avx2 = false;
-  /* While compacted (compact_defined): the batch's size before, and where each point was;
-   * with AVX2, which of each group of eight points were kept, for how many points and slots
-   * (compact_defined_avx2). */
-  int64_t full_size = 0;
+  /* While compacted (compact_defined): the batch's size before, the points kept (size is
+   * that rounded up to a multiple of 8), and where each point was; with AVX2, which of each
+   * group of eight points were kept, for how many points and slots (compact_defined_avx2). */
+  int64_t full_size = 0, kept_size = 0;
   int32_t index[N];
   uint8_t group_masks[N / 8 + 1];
   int64_t packed_points = 0, packed_slots = 0;
@@ -101,20 +101,20 @@ template<int64_t N> struct MapBatch {
 /* compact_defined's loop eight points at a time (left-packed by a permutation), from point
  * r_k and slot r_n on: advances both past the last whole group of eight. */
 __attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_size> &b,
-                                                          bool carry_v, int64_t &r_n,
-                                                          int64_t &r_k);
+                                                          int64_t &r_n, int64_t &r_k);
 /* expand_defined's loop for the groups compact_defined_avx2 packed. */
 __attribute__((target("avx2"))) void expand_defined_avx2(MapBatch<map_batch_size> &b);
 #endif
 
 /* A batch in which few points can be inside (the others are beyond the map's largest radius
  * or outside its height range: the shell of a query around a collider, most of a groom) looks
- * up only those. compact_defined moves them to the front of the batch (x, y, z, r_p and, with
- * carry_v, v), the stages run on them alone, and expand_defined moves their results back
- * (valid, inside, depth, N, and x, y, z); the other points are left not valid. A point's
- * operations are the same either way, only which lane runs them changes. Returns false (and
- * leaves the batch as it is) when more than 3/4 of the points are defined. */
-template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
+ * up only those. compact_defined moves them to the front of the batch (x, y, z: the maps take
+ * square roots only after it, for the points kept), the stages run on them alone, and
+ * expand_defined moves their results back (valid, inside, depth, N, and x, y, z); the other
+ * points are left not valid. A point's operations are the same either way, only which lane
+ * runs them changes. Returns false (and leaves the batch as it is) when more than 3/4 of the
+ * points are defined. */
+template<int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
 {
   int32_t defined_num = 0;
   for (int64_t k = 0; k < b.size; k++) {
@@ -129,7 +129,7 @@ template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapB
 #if defined(HAIRDYN_BLEND_AVX2)
   if constexpr (N == map_batch_size) {
     if (b.avx2) {
-      compact_defined_avx2(b, carry_v, n, k);
+      compact_defined_avx2(b, n, k);
     }
   }
 #endif
@@ -138,15 +138,22 @@ template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapB
     b.x[n] = b.x[k];
     b.y[n] = b.y[k];
     b.z[n] = b.z[k];
-    b.r_p[n] = b.r_p[k];
-    if constexpr (carry_v) {
-      b.v[n] = b.v[k];
-    }
     n += b.defined[k];
   }
+  /* Whole groups of eight, the last filled with copies of the last point kept: the stages'
+   * vector loops then run no remainder (scalar or half width, with branches that cannot be
+   * predicted), and the copies' results are never read. */
+  static_assert(N % 8 == 0, "a compacted batch is padded to groups of eight");
+  const int64_t padded = (n + 7) & ~int64_t(7);
+  for (int64_t j = n; j < padded; j++) {
+    b.x[j] = b.x[n - 1];
+    b.y[j] = b.y[n - 1];
+    b.z[j] = b.z[n - 1];
+  }
   b.full_size = b.size;
-  b.size = n;
-  for (int64_t j = 0; j < n; j++) {
+  b.kept_size = n;
+  b.size = padded;
+  for (int64_t j = 0; j < padded; j++) {
     b.defined[j] = 1;
   }
   return true;
@@ -154,22 +161,26 @@ template<bool carry_v, int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapB
 
 template<int64_t N> HAIRDYN_BATCH_INLINE void expand_defined(MapBatch<N> &b)
 {
-  const int64_t n = b.size;
-  /* valid and inside kept aside (in c00, read by no later stage), then cleared everywhere. */
+  const int64_t n = b.kept_size;
+  /* With AVX2, the slots and points compact_defined_avx2 packed are moved back by
+   * expand_defined_avx2 (which writes valid and inside of all its points). */
+  int64_t j_end = 0, k_start = 0;
+#if defined(HAIRDYN_BLEND_AVX2)
+  if constexpr (N == map_batch_size) {
+    j_end = b.avx2 ? b.packed_slots : 0;
+    k_start = b.avx2 ? b.packed_points : 0;
+  }
+#endif
+  /* valid and inside kept aside (in c00, read by no later stage), then cleared for the
+   * points below. */
   for (int64_t j = 0; j < n; j++) {
     b.c00[j] = uint32_t(b.valid[j] | (b.inside[j] << 1));
   }
-  for (int64_t k = 0; k < b.full_size; k++) {
+  for (int64_t k = k_start; k < b.full_size; k++) {
     b.valid[k] = 0;
     b.inside[k] = 0;
   }
   /* Backward, in place: index[j] >= j, and the slots below j are still to be read. */
-  int64_t j_end = 0;
-#if defined(HAIRDYN_BLEND_AVX2)
-  if constexpr (N == map_batch_size) {
-    j_end = b.avx2 ? b.packed_slots : 0;
-  }
-#endif
   for (int64_t j = n - 1; j >= j_end; j--) {
     const int64_t k = b.index[j];
     b.valid[k] = int32_t(b.c00[j] & 1u);
@@ -211,16 +222,13 @@ HAIRDYN_BATCH_INLINE float fast_atan2(const float y, const float x)
   /* 0 / 1 at the origin: no division is left to a branch, so the loop vectorises. */
   const float a = small / (big > 0.0f ? big : 1.0f);
   const float s = a * a;
-  /* Minimax polynomial for atan on [0, 1]. */
-  float r =
-      ((((((-0.0040540580f * s + 0.0218612288f) * s - 0.0559098861f) * s + 0.0964200441f) * s -
-         0.1390853351f) *
-            s +
-        0.1994653599f) *
-           s -
-       0.3332985605f) *
-          s * a +
-      a;
+  /* Minimax polynomial for atan on [0, 1], by Estrin's scheme (pairs of terms in s, s², s⁴
+   * summed as a tree: a chain of 5 products and sums instead of Horner's 14). */
+  const float s2 = s * s, s4 = s2 * s2;
+  const float low =
+      (-0.3332985605f + 0.1994653599f * s) + s2 * (-0.1390853351f + 0.0964200441f * s);
+  const float high = (-0.0559098861f + 0.0218612288f * s) + s2 * -0.0040540580f;
+  float r = (low + s4 * high) * s * a + a;
   r = ay > ax ? 1.57079637f - r : r;
   r = x < 0.0f ? 3.14159274f - r : r;
   return y < 0.0f ? -r : r;

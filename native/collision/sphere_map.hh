@@ -51,26 +51,29 @@ class SphereMap {
     /* Whether any point is within half a row of a pole (few are: the pole blend below is
      * skipped for batches with none). */
     int32_t any_near_pole = 0;
-    /* Short loops, one step each (see MapBatch). */
+    /* Short loops, one step each (see MapBatch). Beyond the largest radius P is never
+     * inside: compared squared, the square roots are taken only for the points looked up. */
     for (int64_t k = 0; k < b.size; k++) {
       const float x = b.x[k], y = b.y[k], z = b.z[k];
-      const float rho_xz_sq = x * x + z * z;
-      const float r_sq = rho_xz_sq + y * y;
-      b.r_p[k] = std::sqrt(r_sq);
+      const float r_sq = (x * x + z * z) + y * y;
       b.defined[k] = inside_only ? (r_sq < max_radius_sq ? 1 : 0) : 1;
-      b.v[k] = std::sqrt(rho_xz_sq);
     }
     bool compacted = false;
     if constexpr (inside_only && N > 1) {
-      compacted = compact_defined<true>(b);
+      compacted = compact_defined(b);
     }
-    /* θ around the pole axis, φ from it. */
+    /* r_p = |P| and, in v for now, P's distance from the pole axis. */
+    for (int64_t k = 0; k < b.size; k++) {
+      const float x = b.x[k], y = b.y[k], z = b.z[k];
+      const float rho_xz_sq = x * x + z * z;
+      b.r_p[k] = std::sqrt(rho_xz_sq + y * y);
+      b.v[k] = std::sqrt(rho_xz_sq);
+    }
+    /* φ from the pole axis and θ around it, in one loop. */
     for (int64_t k = 0; k < b.size; k++) {
       const float v = fast_atan2(b.v[k], b.y[k]) * v_per_radian - 0.5f;
       b.v[k] = v;
       any_near_pole |= (v < 0.0f ? 1 : 0) | (v > v_last ? 1 : 0);
-    }
-    for (int64_t k = 0; k < b.size; k++) {
       b.u[k] = fast_atan2(b.z[k], b.x[k]) * u_per_radian;
     }
     for (int64_t k = 0; k < b.size; k++) {
