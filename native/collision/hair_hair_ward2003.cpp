@@ -43,15 +43,18 @@ struct StartPositions {
   bool sweeps() const { return !x0.is_empty() || !v.is_empty(); }
 };
 
-/* Whether two boxes overlap across the column axes: one's (lo y, lo z, −hi y, −hi z) against
- * the other's (hi y, hi z, −lo y, −lo z). */
-inline bool boxes_meet(const vec4 &box, const vec4 &cross)
+/* The box of entry e across the column axes as the other entries' boxes are compared with
+ * it: its (hi y, hi z, −lo y, −lo z) against their (lo y, lo z, −hi y, −hi z). */
+inline vec4 cross_of(const SegmentGridScratch &g, const size_t e)
 {
-#if defined(__SSE2__)
-  return _mm_movemask_ps(_mm_cmple_ps(_mm_loadu_ps(&box.x), _mm_loadu_ps(&cross.x))) == 15;
-#else
-  return box.x <= cross.x && box.y <= cross.y && box.z <= cross.z && box.w <= cross.w;
-#endif
+  return vec4(-g.neg_hi_y[e], -g.neg_hi_z[e], -g.lo_y[e], -g.lo_z[e]);
+}
+
+/* Whether entry f's box overlaps, across the column axes, the box whose cross_of is `cross`. */
+inline bool boxes_meet(const SegmentGridScratch &g, const size_t f, const vec4 &cross)
+{
+  return g.lo_y[f] <= cross.x && g.lo_z[f] <= cross.y && g.neg_hi_y[f] <= cross.z &&
+         g.neg_hi_z[f] <= cross.w;
 }
 
 /* test_pair's rejections, from the grid's copies of the two segments (they lie near each
@@ -189,6 +192,29 @@ inline int cannot_touch4(const SegmentGridScratch::Segment &a,
   }
   return _mm_movemask_ps(reject);
 }
+#endif
+
+#if defined(__SSE2__)
+/* Per 4-bit mask of lanes: its set lanes in order (the rest 0), and how many there are. */
+struct LaneOrder {
+  alignas(16) int32_t lanes[16][4];
+  uint8_t count[16];
+};
+constexpr LaneOrder make_lane_order()
+{
+  LaneOrder order{};
+  for (int mask = 0; mask < 16; mask++) {
+    int k = 0;
+    for (int lane = 0; lane < 4; lane++) {
+      if (mask >> lane & 1) {
+        order.lanes[mask][k++] = lane;
+      }
+    }
+    order.count[mask] = uint8_t(k);
+  }
+  return order;
+}
+constexpr LaneOrder lane_order = make_lane_order();
 #endif
 
 /* The grid cell holding p (clamped to the grid). */
@@ -394,9 +420,11 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
                 });
     }
   });
-  g.lo_x.resize(entries_num);
   g.hi_x.resize(entries_num);
-  g.cross_box.resize(entries_num);
+  for (std::vector<float> *values : {&g.lo_x, &g.lo_y, &g.lo_z, &g.neg_hi_y, &g.neg_hi_z}) {
+    values->resize(entries_num + 3);
+    std::fill(values->end() - 3, values->end(), 0.0f); /* the padding: loaded, never a hit */
+  }
   g.entry_segments.resize(entries_num);
   g.entry_point.resize(entries_num);
   g.entry_curve.resize(entries_num);
@@ -407,7 +435,10 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
       const vec3 lo = g.box_min[k], hi = g.box_max[k];
       g.lo_x[size_t(e)] = lo.x;
       g.hi_x[size_t(e)] = hi.x;
-      g.cross_box[size_t(e)] = vec4(lo.y, lo.z, -hi.y, -hi.z);
+      g.lo_y[size_t(e)] = lo.y;
+      g.lo_z[size_t(e)] = lo.z;
+      g.neg_hi_y[size_t(e)] = -hi.y;
+      g.neg_hi_z[size_t(e)] = -hi.z;
       const int32_t p = int32_t(k) + g.segment_curve[k];
       SegmentGridScratch::Segment &segment = g.entry_segments[size_t(e)];
       const vec3 da = positions[p + 1] - positions[p];
@@ -744,7 +775,7 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
     const vec4 cross(hi.y, hi.z, -lo.y, -lo.z);
     int64_t tested = 0;
     for (uint32_t f = begin; f < end; f++) {
-      if (g.lo_x[f] > hi.x || g.hi_x[f] < lo.x || !boxes_meet(g.cross_box[f], cross)) {
+      if (g.lo_x[f] > hi.x || g.hi_x[f] < lo.x || !boxes_meet(g, f, cross)) {
         continue;
       }
       tested += test(point, curve, sweep, g.entry_point[f], g.entry_curve[f], g.entry_sweep[f],
@@ -760,10 +791,14 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
   const float sin_parallel2 = ctx.sin_parallel * ctx.sin_parallel;
   const bool sweeps = ctx.start.sweeps();
   const float *lo_x = g.lo_x.data(), *hi_x = g.hi_x.data();
-  const vec4 *cross_box = g.cross_box.data();
+#if defined(__SSE2__)
+  const float *lo_y = g.lo_y.data(), *lo_z = g.lo_z.data(), *neg_hi_y = g.neg_hi_y.data(),
+              *neg_hi_z = g.neg_hi_z.data();
+#endif
   const SegmentGridScratch::Segment *segments = g.entry_segments.data();
   const int32_t *entry_point = g.entry_point.data(), *entry_curve = g.entry_curve.data();
   const float *entry_sweep = g.entry_sweep.data();
+#if !defined(__SSE2__)
   /* The pair of entries e and f, whose boxes overlap (rejected: by cannot_touch). */
   const auto test_hit = [&](const uint32_t e, const uint32_t f, const bool rejected,
                             std::vector<SegmentContact> &out) {
@@ -776,11 +811,22 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                int64_t(1) :
                int64_t(0);
   };
+#else
+  /* What test counts for the pair of entries e and f, without a branch. */
+  const auto is_candidate = [&](const uint32_t e, const uint32_t f) {
+    return int64_t((entry_curve[e] != entry_curve[f]) |
+                   (!different_strands_only & (std::abs(entry_point[e] - entry_point[f]) > 1)));
+  };
+#endif
   g.chunk_contacts.resize(size_t(cell_chunks_num + big_num));
   const int64_t candidates = parallel_reduce(
       cell_chunks_num + big_num, 1, int64_t(0),
       [&](const IndexRange chunks) {
         int64_t tested = 0;
+#if defined(__SSE2__)
+        /* An entry's box hits (entries), gathered first and then tested four at a time. */
+        std::vector<uint32_t> hits(1024);
+#endif
         for (int64_t chunk = chunks.start; chunk < chunks.one_after_last(); chunk++) {
           std::vector<SegmentContact> &out = g.chunk_contacts[size_t(chunk)];
           out.clear();
@@ -836,45 +882,19 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
               next[n] = g.cell_offsets[cell_index(0, yy, zz)];
               stop[n] = g.cell_offsets[cell_index(0, yy, zz) + 1];
             }
-#if defined(__SSE2__)
-            uint32_t hits[4];
-            int hits_num = 0;
-            /* The box hits of entry e: four at a time through cannot_touch4, the rest
-             * (fewer than four) one by one. */
-            const auto test_hits = [&](const uint32_t e, const int n) {
-              int64_t tested_hits = 0;
-              int rejected = 0;
-              if (n == 4) {
-                const SegmentGridScratch::Segment *const b[4] = {
-                    &segments[hits[0]], &segments[hits[1]], &segments[hits[2]],
-                    &segments[hits[3]]};
-                rejected = cannot_touch4(segments[e], b, sin_parallel2, sweeps);
-              }
-              else {
-                for (int i = 0; i < n; i++) {
-                  rejected |= cannot_touch(segments[e], segments[hits[i]], sin_parallel2,
-                                           sweeps) ?
-                                  1 << i :
-                                  0;
-                }
-              }
-              for (int i = 0; i < n; i++) {
-                tested_hits += test_hit(e, hits[i], (rejected >> i & 1) != 0, out);
-              }
-              return tested_hits;
-            };
-#endif
-            const float *const lo_x_local = lo_x;
-            const vec4 *const cross_box_local = cross_box;
             for (uint32_t e = begin; e < end; e++) {
               const float lo = lo_x[e], hi = hi_x[e];
               const int32_t point = entry_point[e];
-              const vec4 box = cross_box[e];
-              const vec4 cross(-box.z, -box.w, -box.x, -box.y); /* (hi y, hi z, −lo y, −lo z) */
+              const vec4 cross = cross_of(g, e); /* (hi y, hi z, −lo y, −lo z) */
               const ivec3 reach = cell_of(vec3(hi, cross.x, cross.y), g.grid_lo, g.inv_cell,
                                           dims);
               const int n_y = reach.y > y ? 3 : 2, n_z = reach.z > z ? 3 : 2;
-#if !defined(__SSE2__)
+#if defined(__SSE2__)
+              const __m128 e_hi = _mm_set1_ps(hi), e_hi_y = _mm_set1_ps(cross.x),
+                           e_hi_z = _mm_set1_ps(cross.y), e_neg_lo_y = _mm_set1_ps(cross.z),
+                           e_neg_lo_z = _mm_set1_ps(cross.w);
+              size_t hits_num = 0;
+#else
               const SegmentGridScratch::Segment &segment = segments[e];
 #endif
               for (int dz = 0; dz < n_z; dz++) {
@@ -887,29 +907,81 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                     f++;
                   }
                   next[n] = f;
-                  const float *const column_lo = lo_x_local;
-                  const vec4 *const column_box = cross_box_local;
-                  for (; f < f_stop && column_lo[f] <= hi; f++) {
 #if defined(__SSE2__)
-                    /* Branch-free: the hit is kept when the boxes meet. */
-                    hits[hits_num] = f;
-                    hits_num += boxes_meet(column_box[f], cross) ? 1 : 0;
-                    if (hits_num == 4) {
-                      tested += test_hits(e, 4);
-                      hits_num = 0;
+                  /* Room for every entry left in the column, and four more (a block writes
+                   * four whatever it keeps). */
+                  if (hits.size() < hits_num + (f_stop - f) + 4) {
+                    hits.resize(2 * (hits_num + (f_stop - f) + 4));
+                  }
+                  /* Four entries at a time, without a branch per entry: the lanes that start
+                   * before e's end (the column is sorted: the first ones), within the column
+                   * (`lanes`), and whose boxes meet e's across, appended to the hits (four
+                   * written, the hits counted). Returns whether all four start before e's
+                   * end. */
+                  const auto block = [&](const uint32_t first, const int lanes) {
+                    const __m128 along = _mm_cmple_ps(_mm_loadu_ps(lo_x + first), e_hi);
+                    const __m128 meet = _mm_and_ps(
+                        _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(lo_y + first), e_hi_y),
+                                   _mm_cmple_ps(_mm_loadu_ps(lo_z + first), e_hi_z)),
+                        _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(neg_hi_y + first), e_neg_lo_y),
+                                   _mm_cmple_ps(_mm_loadu_ps(neg_hi_z + first), e_neg_lo_z)));
+                    const int hit_bits = _mm_movemask_ps(_mm_and_ps(along, meet)) & lanes;
+                    _mm_storeu_si128(
+                        reinterpret_cast<__m128i *>(hits.data() + hits_num),
+                        _mm_add_epi32(_mm_set1_epi32(int32_t(first)),
+                                      _mm_load_si128(reinterpret_cast<const __m128i *>(
+                                          lane_order.lanes[hit_bits]))));
+                    hits_num += lane_order.count[hit_bits];
+                    return _mm_movemask_ps(along) == 15;
+                  };
+                  for (; f + 4 <= f_stop; f += 4) {
+                    if (!block(f, 15)) {
+                      break;
                     }
+                  }
+                  if (f < f_stop && f + 4 > f_stop) {
+                    block(f, (1 << (f_stop - f)) - 1);
+                  }
 #else
-                    if (boxes_meet(column_box[f], cross)) {
+                  for (; f < f_stop && lo_x[f] <= hi; f++) {
+                    if (boxes_meet(g, f, cross)) {
                       tested += test_hit(
                           e, f, cannot_touch(segment, segments[f], sin_parallel2, sweeps), out);
                     }
-#endif
                   }
+#endif
                 }
               }
 #if defined(__SSE2__)
-              tested += test_hits(e, hits_num);
-              hits_num = 0;
+              /* e's hits: all counted, cannot_touch's rejections four at a time, the exact
+               * test for the few kept. */
+              for (size_t i = 0; i < hits_num; i += 4) {
+                const int n = int(std::min<size_t>(hits_num - i, 4));
+                const uint32_t *const four = hits.data() + i;
+                int rejected = 0;
+                if (n == 4) {
+                  const SegmentGridScratch::Segment *const b[4] = {
+                      &segments[four[0]], &segments[four[1]], &segments[four[2]],
+                      &segments[four[3]]};
+                  rejected = cannot_touch4(segments[e], b, sin_parallel2, sweeps);
+                }
+                else {
+                  for (int m = 0; m < n; m++) {
+                    rejected |= cannot_touch(segments[e], segments[four[m]], sin_parallel2,
+                                             sweeps) ?
+                                    1 << m :
+                                    0;
+                  }
+                }
+                for (int m = 0; m < n; m++) {
+                  tested += is_candidate(e, four[m]);
+                }
+                for (int kept = ~rejected & ((1 << n) - 1); kept != 0; kept &= kept - 1) {
+                  const uint32_t f = four[__builtin_ctz(unsigned(kept))];
+                  test(entry_point[e], entry_curve[e], entry_sweep[e], entry_point[f],
+                       entry_curve[f], entry_sweep[f], out, &segments[e], &segments[f]);
+                }
+              }
 #endif
             }
           }

@@ -58,7 +58,9 @@ struct SegmentGridScratch {
    * within a column by the lower end of the box along it (ties by segment). Boxes and cells in
    * the axes `axes` (x: the sweep axis along the columns, y and z across them). */
   std::vector<float> lo_x, hi_x; /* its box along the sweep axis */
-  std::vector<vec4> cross_box;   /* and across it: (lo y, lo z, −hi y, −hi z) */
+  /* And across it, the upper ends negated (every test one ≤), each array apart so that four
+   * entries load at once (all five padded by three at the end). */
+  std::vector<float> lo_y, lo_z, neg_hi_y, neg_hi_z;
   struct Segment {
     vec4 origin;       /* its first node at the end of the substep, and its LSS radius */
     vec4 tip;          /* its second node there, and its length² */
