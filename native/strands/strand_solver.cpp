@@ -486,10 +486,12 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
     const vec3 carried = parent_delta_v + d * glm::cross(parent_delta_omega, frame[2]);
     if (delta_v != carried) {
       const vec3 own = (delta_v - carried) / d;
-      /* Δφ̇ = (own · e_φ) / cos θ; at the chart's pole φ is undefined and takes nothing. */
+      /* Δφ̇ = (own · e_φ) / cos θ (cos θ < 0 for a hinge turned past the chart's pole); at
+       * the pole φ is undefined and takes nothing. */
       const float c = deflection.cos_theta;
-      float along_phi = c > 1e-3f ? glm::dot(own, frame[1]) : 0.0f;
-      vec2 delta_rate(glm::dot(own, frame[0]), c > 1e-3f ? along_phi / c : 0.0f);
+      const bool off_pole = std::abs(c) > 1e-3f;
+      float along_phi = off_pole ? glm::dot(own, frame[1]) : 0.0f;
+      vec2 delta_rate(glm::dot(own, frame[0]), off_pole ? along_phi / c : 0.0f);
       if (params_.model == StrandModel::Kurihara1993) {
         delta_rate = slowing_part(angular_velocities_[i], delta_rate);
         along_phi = c * delta_rate.y;
