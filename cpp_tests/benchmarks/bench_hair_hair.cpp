@@ -7,6 +7,7 @@
  * those of hanging hair. */
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <cmath>
 #include <random>
 
@@ -25,7 +26,8 @@ struct SettledGroom {
   std::vector<vec3> rest;
   std::unique_ptr<StrandSolver> solver;
 
-  explicit SettledGroom(const int64_t strands_num)
+  /* With `pass`, the groom settles with it (hair–hair on, as a user runs it). */
+  explicit SettledGroom(const int64_t strands_num, SubstepPass *pass = nullptr)
   {
     std::mt19937 rng(1);
     std::uniform_real_distribution<float> jitter(-0.5f, 0.5f);
@@ -50,6 +52,9 @@ struct SettledGroom {
     StrandParams params;
     params.substeps = 1;
     solver = std::make_unique<StrandSolver>(offsets, rest, mat4(1.0f), Span<vec3>(), params);
+    if (pass != nullptr) {
+      solver->add_pass(pass);
+    }
     for (int frame = 0; frame < 12; frame++) {
       solver->step(1.0f / 96.0f, glm::rotate(mat4(1.0f), 0.02f * float(frame), vec3(0, 0, 1)));
     }
@@ -128,3 +133,38 @@ static void BM_StrandSubstepSameGroom(benchmark::State &state)
   set_thread_num(0);
 }
 BENCHMARK(BM_StrandSubstepSameGroom)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/* The pass as it runs in a simulation with hair–hair on: the groom settled with the pass (so
+ * each substep starts where the last one's pass left the nodes, not from a groom that passed
+ * through itself while it settled without it), then frames of the same head turn, one
+ * substep each. Counters per substep, summed over the timed frames: hair_hair_ms (the pass,
+ * as the solver times it), strand_ms (the rest of the step: the strands' advance and the
+ * take-back of the pass's changes) and their ratio, share (the issue's goal: at most 1). */
+static void BM_HairHairInSimulation(benchmark::State &state)
+{
+  set_thread_num(int(state.range(0)));
+  SweptSphereParams params;
+  params.hair_hair = true;
+  static HairHairPass pass(params);
+  static SettledGroom g(10000, &pass);
+  int frame = 12;
+  double pass_ms = 0.0, step_ms = 0.0;
+  pass.reset_stats();
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    g.solver->step(1.0f / 96.0f, glm::rotate(mat4(1.0f), 0.02f * float(frame++), vec3(0, 0, 1)));
+    step_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                   .count();
+    pass_ms += g.solver->pass_ms("hair_hair");
+    benchmark::DoNotOptimize(g.solver->positions().data());
+  }
+  const double substeps = double(state.iterations());
+  state.counters["hair_hair_ms"] = pass_ms / substeps;
+  state.counters["strand_ms"] = (step_ms - pass_ms) / substeps;
+  state.counters["share"] = pass_ms / (step_ms - pass_ms);
+  state.counters["pairs"] = double(pass.stats().pairs_num) / substeps;
+  state.counters["candidates"] = double(pass.stats().candidates_num) / substeps;
+  state.counters["crossed"] = double(pass.stats().crossed_num) / substeps;
+  set_thread_num(0);
+}
+BENCHMARK(BM_HairHairInSimulation)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
