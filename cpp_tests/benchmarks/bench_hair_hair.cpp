@@ -13,6 +13,7 @@
 
 #include "collision/hair_hair_ward2003.hh"
 #include "core/parallel.hh"
+#include "result_hash.hh"
 #include "strands/strand_solver.hh"
 
 using namespace hairdyn;
@@ -100,15 +101,8 @@ static void BM_HairHairSubstep(benchmark::State &state)
     stats = resolve_hair_hair(params, s, scratch, contacts);
     benchmark::DoNotOptimize(positions.data());
   }
-  /* The result's bits (FNV-1a of the corrected positions and velocities): equal across
-   * versions that change the speed but not the result. */
-  uint32_t hash = 2166136261u;
-  for (const std::vector<vec3> *values : {&positions, &velocities}) {
-    const auto *bytes = reinterpret_cast<const unsigned char *>(values->data());
-    for (size_t i = 0; i < values->size() * sizeof(vec3); i++) {
-      hash = (hash ^ bytes[i]) * 16777619u;
-    }
-  }
+  /* The result's bits: equal across versions that change the speed but not the result. */
+  const uint32_t hash = result_hash({positions, velocities});
   state.counters["result_hash"] = double(hash);
   state.counters["crossed"] = double(stats.crossed_num);
   state.counters["pairs"] = double(stats.pairs_num);
