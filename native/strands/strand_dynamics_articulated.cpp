@@ -105,6 +105,17 @@ thread_local std::vector<Body> bodies;
 thread_local std::vector<vec2> mid_accelerations; /* q̈₀ of the predictor, per body */
 thread_local std::vector<vec3> substep_start; /* a strand's nodes where a cut substep began */
 
+/* [v]× M and M [v]×, column by column: the products of cross_matrix(v) with M less its
+ * multiplications by the matrix's zeros (the same sums of the same products otherwise). */
+inline rmat3 cross_times(const rvec3 &v, const rmat3 &m)
+{
+  return rmat3(glm::cross(v, m[0]), glm::cross(v, m[1]), glm::cross(v, m[2]));
+}
+inline rmat3 times_cross(const rmat3 &m, const rvec3 &v)
+{
+  return rmat3(v.z * m[1] - v.y * m[2], v.x * m[2] - v.z * m[0], v.y * m[0] - v.x * m[1]);
+}
+
 inline rmat3 outer(const rvec3 &x, const rvec3 &y)
 {
   return rmat3(x * y.x, x * y.y, x * y.z); /* x yᵀ, column-major */
@@ -377,10 +388,9 @@ bool StrandSolver::articulated_step(const IndexRange points, const Substep &subs
       body.rc = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
       /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c,
        * c. */
-      const rmat3 r = cross_matrix(body.arm);
-      const rmat3 rc = r * body.rc;
-      const rmat3 br = body.rb * r;
-      parent.a += body.ra - br + glm::transpose(-br) - rc * r;
+      const rmat3 rc = cross_times(body.arm, body.rc);
+      const rmat3 br = times_cross(body.rb, body.arm);
+      parent.a += body.ra - br + glm::transpose(-br) - times_cross(rc, body.arm);
       parent.b += body.rb + rc;
       parent.c += body.rc;
     }
