@@ -77,6 +77,9 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
   rest_rotations_.assign(points, mat3(1.0f));
   angles_.assign(points, vec2(0.0f));
   angular_velocities_.assign(points, vec2(0.0f));
+  accelerations_.assign(points, vec2(0.0f));
+  earlier_accelerations_.assign(points, vec2(0.0f));
+  accelerations_known_.assign(size_t(curves_num()), 0);
   trig_.assign(points, vec4(0.0f, 1.0f, 0.0f, 1.0f));
   hinge_steps_.assign(points, HingeStep<vec2>{vec2(0.0f), vec2(0.0f)});
   hinge_stiffness_.assign(points, 0.0f);
@@ -192,6 +195,7 @@ void StrandSolver::place_curve(const int64_t curve)
    * Ω_i = Ω_{i-1} + θ̇ e_φ − φ̇ x (x the chart's pole, see take_back_strand) on top of the
    * head's turn, and its tip moves at v_i = v_{i-1} + d Ω_i × t. */
   const IndexRange points = curve_points(curve_offsets_, curve);
+  accelerations_known_[size_t(curve)] = 0;
   mat3 frame = pose_.rotation_matrix() * root_frames_head_[size_t(curve)];
   root_frames_wo_[size_t(curve)] = frame;
   vec3 node = pose_.transform_point(root_positions_head_[size_t(curve)]);
@@ -380,7 +384,7 @@ bool StrandSolver::advance_strand(const int64_t curve, const Substep &substep, C
   const bool finite = params_.model == StrandModel::Kurihara1993 ?
                           advance_kurihara(points, substep, frame, node_velocity, wind_wo,
                                            counts) :
-                          advance_articulated(points, substep, frame, wind_wo, counts);
+                          advance_articulated(curve, substep, frame, wind_wo, counts);
   if (!finite) {
     counts.diverged++;
     place_at_rest(curve, substep.pose);
@@ -497,6 +501,7 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
         along_phi = c * delta_rate.y;
       }
       angular_velocities_[i] += delta_rate;
+      accelerations_known_[size_t(curve)] = 0; /* a pass's change: no trend of the steps */
       parent_delta_omega += delta_rate.x * frame[1] - delta_rate.y * chart[0];
       parent_delta_v = carried + d * (delta_rate.x * frame[0] + along_phi * frame[1]);
     }
@@ -663,6 +668,7 @@ bool StrandSolver::strand_is_sane(const int64_t curve) const
 void StrandSolver::place_at_rest(const int64_t curve, const HeadPose &pose)
 {
   const IndexRange points = curve_points(curve_offsets_, curve);
+  accelerations_known_[size_t(curve)] = 0;
   mat3 frame = pose.rotation_matrix() * root_frames_head_[size_t(curve)];
   root_frames_wo_[size_t(curve)] = frame;
   vec3 node = pose.transform_point(root_positions_head_[size_t(curve)]);
@@ -688,6 +694,7 @@ void StrandSolver::reset_dynamics(const HeadPose &pose)
   std::fill(angles_.begin(), angles_.end(), vec2(0.0f));
   std::fill(angular_velocities_.begin(), angular_velocities_.end(), vec2(0.0f));
   std::fill(velocities_wo_.begin(), velocities_wo_.end(), vec3(0.0f));
+  std::fill(accelerations_known_.begin(), accelerations_known_.end(), 0);
   const mat3 rotation = pose.rotation_matrix();
   for (size_t curve = 0; curve < root_frames_wo_.size(); curve++) {
     root_frames_wo_[curve] = rotation * root_frames_head_[curve];

@@ -256,12 +256,12 @@ class StrandSolver {
   bool strand_is_sane(int64_t curve) const;
   /* The articulated chain (strand_dynamics_articulated.cpp): one substep, cut into shorter
    * steps while a segment turns fast (see articulated_step). */
-  bool advance_articulated(IndexRange points, const Substep &substep, const mat3 &root_frame,
+  bool advance_articulated(int64_t curve, const Substep &substep, const mat3 &root_frame,
                            const vec3 &wind_wo, Counts &counts);
   /* One step of substep.h. With `r_steps` given, a strand that turns more than
    * max_turn_per_step within it is left unchanged and *r_steps is set to the number of
    * equal steps that keep every turn within the bound (at most max_turn_steps). */
-  bool articulated_step(IndexRange points, const Substep &substep, const mat3 &root_frame,
+  bool articulated_step(int64_t curve, const Substep &substep, const mat3 &root_frame,
                         const vec3 &wind_wo, Counts &counts, int *r_steps);
   /* Each pin of the strand to its rest position carried by the head at the end of the
    * substep, the chain before it reaching it (groom/pins.hh), positions and velocities only:
@@ -314,6 +314,11 @@ class StrandSolver {
   std::vector<mat3> rest_rotations_; /* R_i = F_{i-1}ᵀ F_i at rest */
   std::vector<vec2> angles_;
   std::vector<vec2> angular_velocities_;
+  /* rad/s², per hinge: q̈ of the last articulated step and of the one before (the mid-step
+   * rates' extrapolation, strand_dynamics_articulated.cpp), and per strand how many of the
+   * two are known (none once a state is set or the strand is put at rest). */
+  std::vector<vec2> accelerations_, earlier_accelerations_;
+  std::vector<uint8_t> accelerations_known_;
   std::vector<HingeStep<vec2>> hinge_steps_; /* the integrator's coefficients this frame */
   std::vector<float> hinge_stiffness_;       /* articulated: k = EI / length, this frame */
   std::vector<vec4> trig_; /* (sin θ, cos θ, sin φ, cos φ) of the angles, within a step */
