@@ -68,8 +68,8 @@ def test_strands_settle_under_gravity_and_keep_their_length(open_fixture):
                           rest.positions_wo[rest.curve_offsets[:-1]])  # roots stay put
     # The hair has come to rest: over the last frames the median node moves under 0.05 mm a
     # frame, and 99% of the nodes under 1 mm. (Not every node: a few tips touching the head
-    # chatter by 1-4 mm a frame, the reaction constraint's explicit penalty force on the
-    # articulated chain's light tips; the largest move is printed.)
+    # still move by 1-2 mm a frame, a step's free fall g h² each time they leave the surface;
+    # the largest move is printed.)
     for frame, move in enumerate(moves, 45):
         print(f"frame {frame}: largest move {move.max() * 1e3:.2f} mm")
         assert np.median(move) < 5e-5, (frame, np.median(move))

@@ -6,7 +6,10 @@
  * Forces are per unit mass (accelerations): k in 1/s², c in 1/s. Sign convention: N is the
  * outward normal and d = |PT| > 0 the depth, so the spring term of eq. 13, read with PT as the
  * signed offset of P from T along N (-d inside), pushes outwards:
- *   F_constrained = -(k (P - T)·N + c V·N) N = (k d - c V·N) N.                              */
+ *   F_constrained = -(k (P - T)·N + c V·N) N = (k d - c V·N) N.
+ * The spring and damper are taken at the end of the step dt (backward Euler, the node's depth
+ * and normal velocity after the step): (k d - (c + dt k) V·N) / (1 + dt c + dt² k), the
+ * paper's value as dt → 0 and stable at any dt (see reaction_constraint_force).             */
 #include "collision/collider.hh"
 #include "collision/contact.hh"
 #include "core/math.hh"
@@ -25,7 +28,8 @@ struct ReactionConstants {
 
 /* The output force for one node in contact (Kurihara 1993, eq. 12–15):
  * when the applied force does not lift the node off the surface (F_input · N < 0), its normal
- * part is replaced by the constraint force (k d - c V·N) N and its tangential part is kept;
+ * part is replaced by the constraint force (k d - c V·N) N, taken at the end of the step,
+ * and its tangential part is kept;
  * otherwise the force is returned unchanged (inelastic contact). Friction (μ > 0) then opposes
  * the tangential velocity the step would produce, by at most μ times the normal force the
  * surface exerts, and never more than what stops the sliding within dt. */
