@@ -266,8 +266,8 @@ bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
   const bool implicit = params_.integrator == Integrator::Implicit;
   const vec3 head_center = substep.pose.translation;
   /* The mid-step rates' q̈ (see the top): the last two steps' extrapolated, or a predictor
-   * stage's when they are not both known (a state was set, a pass or a contact changed the
-   * rates, the strand turned fast). */
+   * stage's when they are not both known (a state was set, a pass's changes or contact
+   * impulses broke the trend). */
   uint8_t &known = accelerations_known_[size_t(curve)];
   const bool predict = known < 2;
   mid_accelerations.resize(end - first);
