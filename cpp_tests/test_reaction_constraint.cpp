@@ -58,7 +58,8 @@ TEST(ReactionConstraint, RemovesOnlyTheInwardNormalComponent)
     velocity -= glm::dot(velocity, n) * n; /* Sliding, no normal motion. */
     const vec3 out = reaction_constraint_force(force, velocity, contact_at(vec3(0.0f), n, 0.0f), constants);
     const vec3 tangential = force - glm::dot(force, n) * n;
-    ASSERT_NEAR(glm::length(out - tangential), 0.0f, 1e-5f);
+    /* V·N is zero to rounding (1e-7), which stopping it within the step divides by h. */
+    ASSERT_NEAR(glm::length(out - tangential), 0.0f, 1e-4f);
   }
 }
 
@@ -93,30 +94,40 @@ TEST(ReactionConstraint, MatchesEquation15)
  * h² k = 1.1 and h c = 1.5, and at a 30 times stiffer constraint: with the spring and damper
  * taken at the step's start it overshot, out of the surface and back in every few steps, the
  * more the stiffer (a hair tip lying on the head chattered by millimetres, by centimetres at
- * k = 3·10⁵); taken at the end it stays within 2 g h² of the surface (a step of free fall,
- * 2 mm: what the surface's edge leaves of a node that rests on it, the contact being one of
- * depth > 0). */
-TEST(ReactionConstraint, ANodeOnABodyStaysOnItAtCoarseSteps)
+ * k = 3·10⁵). Taken at the end, it stays within 2 g h² of the surface (2 mm: pushed onto the
+ * surface exactly, out of contact, it falls back in by a step's free fall); allowed to rest
+ * within rest_depth (the strands' projection tolerance, here 1 mm), it comes to rest there:
+ * over the last 100 steps it moves by less than a micrometre a step. */
+TEST(ReactionConstraint, ANodeOnABodyComesToRestAtCoarseSteps)
 {
   const ColliderSet set = sphere_set(1.0f);
-  for (const float stiffness : {1.0e4f, 3.0e5f}) {
-    CollisionParams params;
-    params.stiffness = stiffness;
-    params.friction = 0.5f; /* on top of the sphere, an unstable equilibrium */
-    const ReactionConstants constants = ReactionConstants::from(params, 1.0f / 96.0f);
-    ASSERT_GT(constants.dt * constants.dt * constants.stiffness, 1.0f);
-    std::vector<vec3> x{{0.0f, 1.01f, 0.0f}}, v{{0.0f, 0.0f, 0.0f}}, f(1);
-    const std::vector<vec3> gravity{{0.0f, -9.81f, 0.0f}};
-    float farthest = 0.0f; /* from the surface, over the last 100 steps */
-    for (int step = 0; step < 300; step++) {
-      apply_reaction_constraint(set, x, v, gravity, constants, f);
-      v[0] += f[0] * constants.dt;
-      x[0] += v[0] * constants.dt;
-      if (step >= 200) {
-        farthest = std::max(farthest, std::abs(glm::length(x[0]) - 1.0f));
+  for (const float rest_depth : {0.0f, 1e-3f}) {
+    for (const float stiffness : {1.0e4f, 3.0e5f}) {
+      CollisionParams params;
+      params.stiffness = stiffness;
+      params.friction = 0.5f; /* on top of the sphere, an unstable equilibrium */
+      const ReactionConstants constants = ReactionConstants::from(params, 1.0f / 96.0f,
+                                                                  rest_depth);
+      ASSERT_GT(constants.dt * constants.dt * constants.stiffness, 1.0f);
+      std::vector<vec3> x{{0.0f, 1.01f, 0.0f}}, v{{0.0f, 0.0f, 0.0f}}, f(1);
+      const std::vector<vec3> gravity{{0.0f, -9.81f, 0.0f}};
+      float farthest = 0.0f; /* from the surface, over the last 100 steps */
+      float largest_move = 0.0f;
+      for (int step = 0; step < 300; step++) {
+        apply_reaction_constraint(set, x, v, gravity, constants, f);
+        v[0] += f[0] * constants.dt;
+        x[0] += v[0] * constants.dt;
+        if (step >= 200) {
+          farthest = std::max(farthest, std::abs(glm::length(x[0]) - 1.0f));
+          largest_move = std::max(largest_move, glm::length(v[0]) * constants.dt);
+        }
+      }
+      SCOPED_TRACE(testing::Message() << "k " << stiffness << ", rest depth " << rest_depth);
+      EXPECT_LT(farthest, std::max(rest_depth, 2.0f * 9.81f * constants.dt * constants.dt));
+      if (rest_depth > 0.0f) {
+        EXPECT_LT(largest_move, 1e-6f);
       }
     }
-    EXPECT_LT(farthest, 2.0f * 9.81f * constants.dt * constants.dt) << "k " << stiffness;
   }
 }
 
@@ -179,7 +190,8 @@ TEST(ReactionConstraint, KernelOverSpansTouchesOnlyNodesInContact)
 TEST(ReactionConstraint, NodeComesToRestOnTheSurface)
 {
   const ColliderSet set = sphere_set(1.0f);
-  const ReactionConstants constants{1.0e4f, std::sqrt(2.0e4f), 0.5f, 1e-3f};
+  /* Allowed to rest 1 mm deep, as the strands allow their projection tolerance. */
+  const ReactionConstants constants{1.0e4f, std::sqrt(2.0e4f), 0.5f, 1e-3f, 1e-3f};
   std::vector<vec3> x{{0.0f, 1.2f, 0.0f}}, v{{0.0f, 0.0f, 0.0f}}, f(1);
   const std::vector<vec3> gravity{{0.0f, -9.81f, 0.0f}};
   float lowest = 2.0f;

@@ -67,9 +67,9 @@ def test_strands_settle_under_gravity_and_keep_their_length(open_fixture):
     assert np.array_equal(out.positions_wo[out.curve_offsets[:-1]],
                           rest.positions_wo[rest.curve_offsets[:-1]])  # roots stay put
     # The hair has come to rest: over the last frames the median node moves under 0.05 mm a
-    # frame, and 99% of the nodes under 1 mm. (Not every node: a few tips touching the head
-    # still move by 1-2 mm a frame, a step's free fall g h² each time they leave the surface;
-    # the largest move is printed.)
+    # frame, and 99% of the nodes under 1 mm. (Not every node: a few tips lying on the head
+    # still move by about 1 mm a frame, sliding off and being projected back onto the map's
+    # surface in a cycle of a few frames; the largest move is printed.)
     for frame, move in enumerate(moves, 45):
         print(f"frame {frame}: largest move {move.max() * 1e3:.2f} mm")
         assert np.median(move) < 5e-5, (frame, np.median(move))

@@ -8,9 +8,10 @@
 
 namespace hairdyn {
 
-ReactionConstants ReactionConstants::from(const CollisionParams &params, const float dt)
+ReactionConstants ReactionConstants::from(const CollisionParams &params, const float dt,
+                                          const float rest_depth)
 {
-  return {params.stiffness, params.damping_or_critical(), params.friction, dt};
+  return {params.stiffness, params.damping_or_critical(), params.friction, dt, rest_depth};
 }
 
 vec3 reaction_constraint_force(const vec3 &force, const vec3 &velocity, const Contact &contact,
@@ -28,10 +29,18 @@ vec3 reaction_constraint_force(const vec3 &force, const vec3 &velocity, const Co
    * (backward Euler, as Ward & Lin 2003 appendix A takes the hinge springs): the depth then is
    * d − h V'·N and V'·N = V·N + h F_n, so F_n = (k d − (c + h k) V·N) / (1 + h c + h² k).
    * Taken at the step's start, the penalty overshoots once h² k or h c nears 1 (the defaults
-   * at 96 substeps a second: 1.1 and 1.5) and a node resting on a body chatters in and out. */
+   * at 96 substeps a second: 1.1 and 1.5) and a node resting on a body chatters in and out.
+   * The spring acts beyond rest_depth only. Within it the surface gives what keeps the node
+   * from moving further in at the step's end and no more, max(F·N, −V·N / h): a node comes to
+   * rest there instead of being pushed onto the surface, out of contact, to fall back in by
+   * g h² at the next step. The surface never pulls. */
   const float h = constants.dt, k = constants.stiffness, c = constants.damping;
-  const float constrained_n = (k * contact.depth - (c + h * k) * glm::dot(velocity, n)) /
-                              (1.0f + h * c + h * h * k);
+  const float v_n = glm::dot(velocity, n);
+  const float spring_depth = contact.depth - constants.rest_depth;
+  const float constrained_n =
+      spring_depth > 0.0f ?
+          std::max((k * spring_depth - (c + h * k) * v_n) / (1.0f + h * c + h * h * k), 0.0f) :
+          std::max(force_n, -v_n / h);
   /* eq. 14 / 15 */
   vec3 output = unconstrained + constrained_n * n;
   if (constants.friction > 0.0f) {

@@ -9,7 +9,9 @@
  *   F_constrained = -(k (P - T)·N + c V·N) N = (k d - c V·N) N.
  * The spring and damper are taken at the end of the step dt (backward Euler, the node's depth
  * and normal velocity after the step): (k d - (c + dt k) V·N) / (1 + dt c + dt² k), the
- * paper's value as dt → 0 and stable at any dt (see reaction_constraint_force).             */
+ * paper's value as dt → 0 and stable at any dt (see reaction_constraint_force). The spring
+ * acts on the depth beyond rest_depth; within it the surface only stops inward motion, with
+ * max(F·N, −V·N / dt); it never pulls.                                                       */
 #include "collision/collider.hh"
 #include "collision/contact.hh"
 #include "core/math.hh"
@@ -22,8 +24,11 @@ struct ReactionConstants {
   float damping = 0.0f;     /* c, 1/s: use CollisionParams::damping_or_critical() (√(2k)). */
   float friction = 0.0f;    /* μ. */
   float dt = 1.0f / 24.0f;  /* Time step, s: bounds friction so it stops, never reverses, sliding. */
+  /* m: a node may rest this deep without the spring pushing it (the projection's tolerance):
+   * pushed out to the surface exactly, it fell back in by g dt² every time it left it. */
+  float rest_depth = 0.0f;
 
-  static ReactionConstants from(const CollisionParams &params, float dt);
+  static ReactionConstants from(const CollisionParams &params, float dt, float rest_depth = 0.0f);
 };
 
 /* The output force for one node in contact (Kurihara 1993, eq. 12–15):

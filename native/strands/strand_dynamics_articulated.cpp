@@ -216,7 +216,7 @@ bool StrandSolver::advance_articulated(const int64_t curve, const Substep &subst
     if (h != step.h) {
       step.h = h;
       if (colliders_ != nullptr) {
-        step.reaction = ReactionConstants::from(collision_params_, h);
+        step.reaction = ReactionConstants::from(collision_params_, h, step.projection_tolerance_wo);
       }
     }
     int split = 1;
@@ -236,7 +236,8 @@ bool StrandSolver::advance_articulated(const int64_t curve, const Substep &subst
       }
       step.h = std::max(h / float(split), shortest);
       if (colliders_ != nullptr) {
-        step.reaction = ReactionConstants::from(collision_params_, step.h);
+        step.reaction =
+            ReactionConstants::from(collision_params_, step.h, step.projection_tolerance_wo);
       }
       continue;
     }

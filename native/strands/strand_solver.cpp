@@ -538,9 +538,10 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     head.center = substep.pose.translation;
     substep.forces = ForceField(params_, line_density(), head, velocity);
     if (colliders_ != nullptr) {
-      substep.reaction = ReactionConstants::from(collision_params_, substep.h);
       substep.projection_tolerance_wo = collision_params_.projection_tolerance *
                                         colliders_->size_wo();
+      substep.reaction = ReactionConstants::from(collision_params_, substep.h,
+                                                 substep.projection_tolerance_wo);
     }
   }
 
