@@ -215,9 +215,7 @@ bool StrandSolver::advance_articulated(const int64_t curve, const Substep &subst
     const float h = remaining <= 1.001f * step.h ? remaining : step.h;
     if (h != step.h) {
       step.h = h;
-      if (colliders_ != nullptr) {
-        step.reaction = ReactionConstants::from(collision_params_, h, step.projection_tolerance_wo);
-      }
+      step.reaction.dt = h; /* the substep's collision constants, for this step */
     }
     int split = 1;
     if (!articulated_step(curve, step, root_frame, wind_wo, counts,
@@ -235,10 +233,7 @@ bool StrandSolver::advance_articulated(const int64_t curve, const Substep &subst
                              positions_wo_.begin() + points.one_after_last());
       }
       step.h = std::max(h / float(split), shortest);
-      if (colliders_ != nullptr) {
-        step.reaction =
-            ReactionConstants::from(collision_params_, step.h, step.projection_tolerance_wo);
-      }
+      step.reaction.dt = step.h;
       continue;
     }
     remaining = h == remaining ? 0.0f : remaining - h;
