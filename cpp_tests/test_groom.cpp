@@ -85,3 +85,41 @@ TEST(Metrics, StretchAndNonFinite)
   EXPECT_EQ(count_nonfinite(now.positions), 2);
   EXPECT_TRUE(std::isinf(max_relative_stretch(rest.offsets, rest.positions, now.positions)));
 }
+
+TEST(Metrics, StretchCountsShrinkingAsMuchAsStretching)
+{
+  const TwoStrands rest;
+  TwoStrands now;
+  now.positions[2].z = 0.15f; /* second segment 0.1 -> 0.05 */
+  EXPECT_NEAR(max_relative_stretch(rest.offsets, rest.positions, now.positions), 0.5f, 1e-5f);
+  now.positions[6].z = 0.2f; /* the last segment 0.1 -> 0: a shrink to nothing, the larger */
+  EXPECT_NEAR(max_relative_stretch(rest.offsets, rest.positions, now.positions), 1.0f, 1e-6f);
+  TwoStrands collapsed_rest; /* a rest segment of no length: any length is infinitely far */
+  collapsed_rest.positions[1] = collapsed_rest.positions[0];
+  EXPECT_TRUE(std::isinf(max_relative_stretch(rest.offsets, collapsed_rest.positions,
+                                              rest.positions)));
+}
+
+TEST(Groom, StrandsErrorChecksTheOffsetsAlone)
+{
+  TwoStrands g;
+  g.positions[4].y = NAN; /* values are not its concern */
+  EXPECT_EQ(find_strands_error(g.offsets, int64_t(g.positions.size())), "");
+  EXPECT_NE(find_strands_error(g.offsets, 6).find("6 points"), std::string::npos);
+  g.offsets = {0, 1, 7};
+  EXPECT_NE(find_strands_error(g.offsets, 7).find("strand 0 has 1 point"), std::string::npos);
+}
+
+TEST(Metrics, PointTangentsFollowEachStrand)
+{
+  TwoStrands g;
+  g.positions[5] = g.positions[4]; /* a zero-length segment: a zero direction */
+  g.positions[6] = g.positions[4] + vec3(0.3f, 0.0f, 0.0f);
+  std::vector<vec3> tangents(g.positions.size(), vec3(7.0f));
+  point_tangents(g.offsets, g.positions, tangents);
+  const std::vector<vec3> expected = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, /* a tip: its segment's */
+                                      {0, 0, 1}, {0, 0, 0}, {1, 0, 0}, {1, 0, 0}};
+  for (size_t i = 0; i < expected.size(); i++) {
+    EXPECT_NEAR(glm::distance(tangents[i], expected[i]), 0.0f, 1e-6f) << "point " << i;
+  }
+}

@@ -132,7 +132,7 @@ def test_write_back_is_visible_in_the_depsgraph(open_fixture):
     curves_out = bridge.ensure_curves_output(None, "Out", groom.curve_offsets)
     points_out = bridge.ensure_points_output(None, "OutPoints")
     shifted = groom.positions_wo + np.float32(0.5)
-    direction = simulation.point_tangents(groom.curve_offsets, shifted)
+    direction = native.load().point_tangents(groom.curve_offsets, shifted)
     density = np.linspace(0.0, 1.0, len(shifted), dtype=np.float32)
     bridge.write_curves(curves_out, shifted)
     bridge.write_points(points_out, shifted, {"direction": direction, "density": density})

@@ -178,6 +178,21 @@ static py::array read_only_view(const py::dtype &dtype, std::vector<py::ssize_t>
   return view;
 }
 
+void check_strands(const Span<int32_t> curve_offsets, const Span<vec3> positions)
+{
+  const std::string error = find_strands_error(curve_offsets, positions.size());
+  if (!error.empty()) {
+    fail("Invalid hair: " + error + ".");
+  }
+}
+
+py::array_t<float> new_float3(const int64_t size, MutableSpan<vec3> &r_span)
+{
+  py::array_t<float> array({size, int64_t(3)});
+  r_span = MutableSpan<vec3>(reinterpret_cast<vec3 *>(array.mutable_data()), size);
+  return array;
+}
+
 py::array float3_view(const Span<vec3> span, const py::handle owner)
 {
   return read_only_view(py::dtype::of<float>(), {span.size(), 3},

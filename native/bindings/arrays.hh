@@ -43,8 +43,13 @@ Span<mat3> as_frames(py::handle obj, const char *name);
 mat4 as_matrix(py::handle obj, const char *name);
 /* Raises "Invalid hair: ..." unless the strands can be simulated. */
 void check_groom(Span<int32_t> curve_offsets, Span<vec3> positions);
+/* Raises "Invalid hair: ..." unless the offsets split the points into strands of two points or
+ * more (find_strands_error): enough to walk them safely, whatever the values. */
+void check_strands(Span<int32_t> curve_offsets, Span<vec3> positions);
 /* One non-zero normal per strand, (C, 3) float32, or an empty span for None. */
 Span<vec3> as_root_normals(py::handle obj, int64_t curves_num);
+/* A new (N, 3) float32 array to write into, and its data as a span. */
+py::array_t<float> new_float3(int64_t size, MutableSpan<vec3> &r_span);
 /* A read-only numpy (N, 3) float32 view of `span`; `owner` lives as long as the view. */
 py::array float3_view(Span<vec3> span, py::handle owner);
 /* A read-only numpy (N, 3, 3) float32 view of `span` (see as_frames). */

@@ -14,14 +14,6 @@ namespace hairdyn::bindings {
 
 namespace {
 
-/* An (N, 3) float32 array to write into, and its data as a span. */
-py::array_t<float> new_float3(const int64_t size, MutableSpan<vec3> &r_span)
-{
-  py::array_t<float> array({size, int64_t(3)});
-  r_span = MutableSpan<vec3>(reinterpret_cast<vec3 *>(array.mutable_data()), size);
-  return array;
-}
-
 /* `parts`: None (the whole mesh), one (K,) int32 array of vertex indices, or a list of them.
  * Fills offsets and vertex indices; the arrays stay owned by the caller's objects. */
 void gather_parts(const py::handle parts, std::vector<int32_t> &r_offsets,

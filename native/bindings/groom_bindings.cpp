@@ -60,7 +60,7 @@ void bind_groom(py::module_ &m)
         const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
         const Span<vec3> rest = as_float3(rest_positions, "rest_positions");
         const Span<vec3> now = as_float3_unchecked(positions, "positions");
-        check_groom(offsets, rest);
+        check_strands(offsets, rest);
         if (now.size() != rest.size()) {
           fail("positions and rest_positions must have the same number of points");
         }
@@ -68,7 +68,24 @@ void bind_groom(py::module_ &m)
         return max_relative_stretch(offsets, rest, now);
       },
       py::arg("curve_offsets"), py::arg("rest_positions"), py::arg("positions"),
-      "Largest relative change of a segment length (0 = no stretch; inf if a point is NaN).");
+      "Largest relative change of a segment length (0 = no stretch; inf if a point is NaN or "
+      "a rest segment has no length).");
+
+  m.def(
+      "point_tangents",
+      [](const py::handle curve_offsets, const py::handle positions) {
+        const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+        const Span<vec3> points = as_float3_unchecked(positions, "positions");
+        check_strands(offsets, points);
+        MutableSpan<vec3> tangents;
+        py::array_t<float> result = new_float3(points.size(), tangents);
+        py::gil_scoped_release release;
+        point_tangents(offsets, points, tangents);
+        return result;
+      },
+      py::arg("curve_offsets"), py::arg("positions"),
+      "(N, 3) float32: each point's unit direction along its strand (its segment's; a tip its "
+      "last segment's; zero for a zero-length segment, NaN where a point is NaN).");
 
   m.def(
       "count_nonfinite",

@@ -36,34 +36,44 @@ static int64_t first_short_segment(const Span<int32_t> curve_offsets, const Span
   return -1;
 }
 
-std::string find_groom_error(const Span<int32_t> curve_offsets, const Span<vec3> positions,
-                             const bool check_segments)
+std::string find_strands_error(const Span<int32_t> curve_offsets, const int64_t points_num)
 {
-  std::ostringstream msg;
   if (curve_offsets.size() < 2) {
     return "the hair has no strands";
   }
+  std::ostringstream msg;
   if (curve_offsets[0] != 0) {
     msg << "curve offsets must start at 0, not " << curve_offsets[0];
     return msg.str();
   }
-  if (curve_offsets.last() != positions.size()) {
-    msg << "curve offsets end at " << curve_offsets.last() << " but there are "
-        << positions.size() << " points";
+  if (curve_offsets.last() != points_num) {
+    msg << "curve offsets end at " << curve_offsets.last() << " but there are " << points_num
+        << " points";
     return msg.str();
   }
   for (int64_t curve = 0; curve + 1 < curve_offsets.size(); curve++) {
-    const int64_t points_num = curve_offsets[curve + 1] - curve_offsets[curve];
-    if (points_num < 0) {
+    const int64_t strand_points_num = curve_offsets[curve + 1] - curve_offsets[curve];
+    if (strand_points_num < 0) {
       msg << "curve offsets decrease at strand " << curve;
       return msg.str();
     }
-    if (points_num < 2) {
-      msg << "strand " << curve << " has " << points_num
+    if (strand_points_num < 2) {
+      msg << "strand " << curve << " has " << strand_points_num
           << " point(s); every strand needs at least 2";
       return msg.str();
     }
   }
+  return {};
+}
+
+std::string find_groom_error(const Span<int32_t> curve_offsets, const Span<vec3> positions,
+                             const bool check_segments)
+{
+  const std::string strands_error = find_strands_error(curve_offsets, positions.size());
+  if (!strands_error.empty()) {
+    return strands_error;
+  }
+  std::ostringstream msg;
   for (int64_t i = 0; i < positions.size(); i++) {
     if (!is_finite(positions[i])) {
       msg << "point " << i << " has a position that is not a finite number (NaN or infinity)";

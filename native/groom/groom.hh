@@ -23,6 +23,11 @@ constexpr float min_segment_length_relative = 1e-6f;
  * least the smallest normal float, so that a groom of coincident points is refused). */
 float min_segment_length(Span<vec3> positions);
 
+/* Returns an empty string when the offsets split `points_num` points into strands:
+ * they start at 0, never decrease, end at points_num, and give every strand at least two
+ * points; otherwise one sentence that says what is wrong and where. */
+std::string find_strands_error(Span<int32_t> curve_offsets, int64_t points_num);
+
 /* Returns an empty string when the groom is valid, otherwise one sentence that says what is
  * wrong and where: offsets start at 0, never decrease, end at the point count; every strand
  * has at least two points; every position is finite; no segment is shorter than

@@ -9,6 +9,11 @@ namespace hairdyn {
 float max_relative_stretch(Span<int32_t> curve_offsets, Span<vec3> rest_positions,
                            Span<vec3> positions);
 
+/* The unit direction of each point along its strand: the segment it starts (a zero vector
+ * for a zero-length one), the last segment's at a tip. Every strand has 2 points or more. */
+void point_tangents(Span<int32_t> curve_offsets, Span<vec3> positions,
+                    MutableSpan<vec3> r_tangents);
+
 /* Number of points with a NaN or infinite coordinate. */
 int64_t count_nonfinite(Span<vec3> positions);
 
