@@ -54,16 +54,20 @@
  * moves on its own) changes the generalised momentum of everything distal to it, and fed a
  * whipping chain energy until it ran away. */
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <vector>
 
 #include "groom/groom.hh"
+#include "strands/chain_lanes.hh"
 #include "strands/deflection.hh"
 #include "strands/strand_solver.hh"
 
-namespace hairdyn {
+/* The lane functions are always inlined: no vector of Lanes crosses a call, so GCC's note
+ * that one would pass differently with and without AVX does not apply (chain_lanes.hh). */
+#pragma GCC diagnostic ignored "-Wpsabi"
 
-namespace {
+namespace hairdyn {
 
 /* The recursion runs in double precision: I^a = I^A − U D⁻¹ Uᵀ cancels most of a body's
  * inertia when its hinge is free (short steps leave little of the springs' armature in D),
@@ -75,33 +79,188 @@ using rvec3 = glm::dvec3;
 using rmat2 = glm::dmat2;
 using rmat3 = glm::dmat3;
 
-inline rvec3 real(const vec3 &v)
-{
-  return rvec3(v);
-}
-
-inline rmat3 cross_matrix(const rvec3 &v)
-{
-  return rmat3(0.0, v.z, -v.y, -v.z, 0.0, v.x, v.y, -v.x, 0.0);
-}
-
-/* One body of the chain during a substep. */
-struct Body {
-  rvec3 s_theta, s_phi;      /* the hinge's axes: q̇ turns the body by θ̇ s_θ + φ̇ s_φ */
-  rvec3 arm;                 /* r, from the parent's hinge point to this one */
-  rvec3 reach;               /* d t, from this hinge point to the segment's tip */
-  rvec3 bias_angular;        /* velocity-product accelerations across the hinge (c_i) */
-  rvec3 bias_linear;
-  rmat3 a, b, c;             /* articulated inertia at P_i, blocks [a b; bᵀ c] */
-  rmat3 ra, rb, rc;          /* the same less what the hinge absorbs: I^a = I^A − U D⁻¹ Uᵀ */
-  rvec3 p_torque, p_force;   /* articulated bias force at P_i */
-  rvec3 u_angular[2], u_linear[2]; /* U = I^A S, one column per hinge axis */
-  rmat2 d_inverse;
-  rvec2 u;                   /* τ − Sᵀ p^A */
+/* One body of the chain during a step, as pass 1 leaves it (single-precision geometry and
+ * contact, and the recursion's inputs in double precision). */
+struct StrandSolver::ArticulatedBody {
   vec3 t, e_theta, pole;     /* the segment's direction, frame[1] and its chart's x axis */
   bool touches;              /* the segment's tip is inside a collider: at `contact` */
   Contact contact;
+  /* Of the shape (the first stage of a step): */
+  rvec3 s_theta, s_phi;      /* the hinge's axes: q̇ turns the body by θ̇ s_θ + φ̇ s_φ */
+  rvec3 arm;                 /* r, from the parent's hinge point to this one */
+  rvec3 reach;               /* d t, from this hinge point to the segment's tip */
+  rmat3 a, b, c;             /* the rod's inertia at P_i, blocks [a b; bᵀ c] */
+  double armature;           /* h γ + h² k: the implicit springs' share of D */
+  /* Of the rates: */
+  rvec3 bias_angular;        /* velocity-product accelerations across the hinge (c_i) */
+  rvec3 bias_linear;
+  rvec3 p_torque, p_force;   /* the rod's bias force at P_i */
+  rvec2 hinge_torque;        /* −k q − (γ + h k) q̇ */
 };
+
+namespace {
+
+using chain::get;
+using chain::Lanes;
+using chain::lane_width;
+using chain::M2;
+using chain::M3;
+using chain::put;
+using chain::V2;
+using chain::V3;
+
+/* A body in Featherstone's recursion, over lanes R (chain_lanes.hh). Aligned for the widest
+ * vector loads: GCC gives a vector of Lanes only 16-byte alignment where AVX is off, and
+ * loses an alignment attribute on a template argument. */
+template<class R> struct alignas(32) Link {
+  V3<R> s_theta, s_phi, arm;
+  V3<R> bias_angular, bias_linear;
+  /* The articulated inertia at P_i, blocks [a b; bᵀ c]: I^A, until pass 2 takes from it what
+   * the hinge absorbs, I^a = I^A − U D⁻¹ Uᵀ. */
+  M3<R> a, b, c;
+  R armature;
+  V3<R> p_torque, p_force;   /* articulated bias force at P_i */
+  V2<R> hinge_torque;
+  V3<R> u_angular[2], u_linear[2]; /* U = I^A S, one column per hinge axis */
+  M2<R> d_inverse;
+  V2<R> u;                   /* τ − Sᵀ p^A */
+  V2<R> acceleration;        /* q̈, pass 3's result */
+};
+
+/* Lane `lane` of `link` from pass 1's body: everything, or (not `shape`) what the rates
+ * change. */
+template<class R>
+void load(Link<R> &link, const int lane, const StrandSolver::ArticulatedBody &body,
+          const bool shape)
+{
+  if (shape) {
+    put(link.s_theta, lane, body.s_theta);
+    put(link.s_phi, lane, body.s_phi);
+    put(link.arm, lane, body.arm);
+    put(link.a, lane, body.a);
+    put(link.b, lane, body.b);
+    put(link.c, lane, body.c);
+    put(link.armature, lane, body.armature);
+  }
+  put(link.bias_angular, lane, body.bias_angular);
+  put(link.bias_linear, lane, body.bias_linear);
+  put(link.p_torque, lane, body.p_torque);
+  put(link.p_force, lane, body.p_force);
+  put(link.hinge_torque, lane, body.hinge_torque);
+}
+
+/* Pass 2, tip to root (Table 7.1, second loop): U = I^A S, D = Sᵀ U + armature,
+ * u = τ − Sᵀ p^A; the body's articulated inertia and bias less what its hinge absorbs,
+ * I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the parent's hinge point.
+ * U, D and I^a depend on the shape and the step alone: the first stage (`shape`) computes
+ * them, and a second only carries the bias forces. */
+template<class R> HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const size_t n,
+                                                         const bool shape)
+{
+  for (size_t i = n; i-- > 0;) {
+    Link<R> &body = links[i];
+    const V3<R> axes[2] = {body.s_theta, body.s_phi};
+    if (shape) {
+      for (int j = 0; j < 2; j++) {
+        body.u_angular[j] = body.a * axes[j];
+        body.u_linear[j] = chain::transpose_times(body.b, axes[j]);
+      }
+      M2<R> d_matrix{{{dot(axes[0], body.u_angular[0]), dot(axes[1], body.u_angular[0])},
+                      {dot(axes[0], body.u_angular[1]), dot(axes[1], body.u_angular[1])}}};
+      d_matrix.c[0].x = d_matrix.c[0].x + body.armature;
+      d_matrix.c[1].y = d_matrix.c[1].y + body.armature;
+      body.d_inverse = chain::inverse(d_matrix);
+    }
+    body.u = body.hinge_torque - V2<R>{dot(axes[0], body.p_torque), dot(axes[1], body.p_torque)};
+    if (i == 0) {
+      break;
+    }
+    const M2<R> &di = body.d_inverse;
+    Link<R> &parent = links[i - 1];
+    if (shape) {
+      /* I^a = I^A − U D⁻¹ Uᵀ, blockwise: U D⁻¹ Uᵀ = Σ_jk U_j (D⁻¹)_jk U_kᵀ
+       * = Σ_k (U D⁻¹)_k U_kᵀ. */
+      const V3<R> wa0 = di.c[0].x * body.u_angular[0] + di.c[0].y * body.u_angular[1];
+      const V3<R> wa1 = di.c[1].x * body.u_angular[0] + di.c[1].y * body.u_angular[1];
+      const V3<R> wl0 = di.c[0].x * body.u_linear[0] + di.c[0].y * body.u_linear[1];
+      const V3<R> wl1 = di.c[1].x * body.u_linear[0] + di.c[1].y * body.u_linear[1];
+      body.a = body.a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
+      body.b = body.b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
+      body.c = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
+      /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c,
+       * c. (−br)ᵀ is added as the negated transpose: the same bits as glm's. */
+      const M3<R> rc = cross_times(body.arm, body.c);
+      const M3<R> br = times_cross(body.b, body.arm);
+            parent.a = parent.a + (body.a - br + transpose(-br) - times_cross(rc, body.arm));
+      parent.b = parent.b + (body.b + rc);
+      parent.c = parent.c + body.c;
+    }
+    const M3<R> &a = body.a, &b = body.b, &c = body.c;
+    const V2<R> du = di * body.u;
+    const V3<R> pa_torque = body.p_torque + a * body.bias_angular + b * body.bias_linear +
+                            du.x * body.u_angular[0] + du.y * body.u_angular[1];
+    const V3<R> pa_force = body.p_force + chain::transpose_times(b, body.bias_angular) +
+                           c * body.bias_linear + du.x * body.u_linear[0] +
+                           du.y * body.u_linear[1];
+    parent.p_torque = parent.p_torque + (pa_torque + cross(body.arm, pa_force));
+    parent.p_force = parent.p_force + pa_force;
+  }
+}
+
+/* Pass 3, root to tip (Table 7.1, third loop): q̈ = D⁻¹ (u − Uᵀ a'), with a' the parent's
+ * acceleration moved to this hinge plus c; the root is fixed in the head's frame. */
+template<class R> HAIRDYN_CHAIN_INLINE void root_to_tip(Link<R> *links, const size_t n)
+{
+  V3<R> parent_alpha{};
+  V3<R> parent_acceleration{};
+  for (size_t i = 0; i < n; i++) {
+    Link<R> &body = links[i];
+    const V3<R> alpha = parent_alpha + body.bias_angular;
+    const V3<R> acceleration = parent_acceleration + cross(parent_alpha, body.arm) +
+                               body.bias_linear;
+    const V2<R> ut_a{
+        dot(body.u_angular[0], alpha) + dot(body.u_linear[0], acceleration),
+        dot(body.u_angular[1], alpha) + dot(body.u_linear[1], acceleration)};
+    const V2<R> q_acceleration = body.d_inverse * (body.u - ut_a);
+    parent_alpha = alpha + q_acceleration.x * body.s_theta + q_acceleration.y * body.s_phi;
+    parent_acceleration = acceleration;
+    body.acceleration = q_acceleration;
+  }
+}
+
+/* Passes 2 and 3 for lane_width strands at once, compiled for the widest vectors the
+ * processor has (each lane's bits are the same on every path, chain_lanes.hh). */
+void recursion_lanes_baseline(Link<Lanes> *links, const size_t n)
+{
+  tip_to_root(links, n, true);
+  root_to_tip(links, n);
+}
+#if defined(__x86_64__)
+__attribute__((target("avx2"))) void recursion_lanes_avx2(Link<Lanes> *links, const size_t n)
+{
+  tip_to_root(links, n, true);
+  root_to_tip(links, n);
+}
+#endif
+using RecursionLanes = void (*)(Link<Lanes> *, size_t);
+const RecursionLanes recursion_lanes = [] {
+#if defined(__x86_64__)
+  __builtin_cpu_init(); /* this runs before constructors: GCC asks for it there */
+  if (__builtin_cpu_supports("avx2")) {
+    return &recursion_lanes_avx2;
+  }
+#endif
+  return &recursion_lanes_baseline;
+}();
+
+thread_local std::vector<StrandSolver::ArticulatedBody> bodies;
+thread_local std::vector<Link<double>> links;
+thread_local std::vector<StrandSolver::ArticulatedBody> lane_bodies[lane_width];
+thread_local std::vector<Link<Lanes>> lane_links;
+thread_local std::vector<vec2> mid_accelerations; /* per body: the mid-step rates' q̈ */
+thread_local std::vector<vec2> accelerations;     /* per body: the step's q̈ */
+thread_local std::vector<std::pair<size_t, vec3>> stops; /* body, outward normal */
+thread_local std::vector<vec3> substep_start; /* a strand's nodes where a cut substep began */
 
 /* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
  * rod's is nearly 0, but a segment never spins by itself: a hinge turns it about its own
@@ -113,19 +272,14 @@ struct Body {
  * is φ̇ sin θ, so bending near rest is unchanged to second order. */
 constexpr float axial_inertia_share = 1.0f;
 
-thread_local std::vector<Body> bodies;
-thread_local std::vector<vec2> mid_accelerations; /* per body: the mid-step rates' q̈ */
-thread_local std::vector<vec3> substep_start; /* a strand's nodes where a cut substep began */
-
-/* [v]× M and M [v]×, column by column: the products of cross_matrix(v) with M less its
- * multiplications by the matrix's zeros (the same sums of the same products otherwise). */
-inline rmat3 cross_times(const rvec3 &v, const rmat3 &m)
+inline rvec3 real(const vec3 &v)
 {
-  return rmat3(glm::cross(v, m[0]), glm::cross(v, m[1]), glm::cross(v, m[2]));
+  return rvec3(v);
 }
-inline rmat3 times_cross(const rmat3 &m, const rvec3 &v)
+
+inline rmat3 cross_matrix(const rvec3 &v)
 {
-  return rmat3(v.z * m[1] - v.y * m[2], v.x * m[2] - v.z * m[0], v.y * m[0] - v.x * m[1]);
+  return rmat3(0.0, v.z, -v.y, -v.z, 0.0, v.x, v.y, -v.x, 0.0);
 }
 
 inline rmat3 outer(const rvec3 &x, const rvec3 &y)
@@ -133,62 +287,71 @@ inline rmat3 outer(const rvec3 &x, const rvec3 &y)
   return rmat3(x * y.x, x * y.y, x * y.z); /* x yᵀ, column-major */
 }
 
-/* The inelastic contact at the tip of body `hit`: if the tip moves into the surface of
- * outward normal n (relative to the head, from the hinge rates and the step's geometry), the
- * impulse λ n with λ = −v_n / (n · Δv(n)) stops that motion, Δv(n) being the tip's velocity
- * change per unit impulse. The impulse's effect on every rate is Featherstone's articulated-
- * body recursion with the impulse as the only force (Table 7.1 without velocity products or
- * hinge torques; D and U are the step's, springs' armature included): tip to root, the
- * impulse's bias p^A = (−reach × n, −n) at `hit` and its share p^a = p^A + U D⁻¹ u, u = −Sᵀ p^A,
- * handed to the parents; root to tip, Δq̇ = D⁻¹ (u − Uᵀ a'). The kinetic energy changes by
- * −v_n² / (2 n · Δv(n)) ≤ 0. */
-void stop_at_contact(const Span<Body> chain, const size_t hit, const rvec3 &n,
+/* The inelastic contact at the tip of body `hit` of lane `lane`: if the tip moves into the
+ * surface of outward normal n (relative to the head, from the hinge rates and the step's
+ * geometry), the impulse λ n with λ = −v_n / (n · Δv(n)) stops that motion, Δv(n) being the
+ * tip's velocity change per unit impulse. The impulse's effect on every rate is
+ * Featherstone's articulated-body recursion with the impulse as the only force (Table 7.1
+ * without velocity products or hinge torques; D and U are the step's, springs' armature
+ * included): tip to root, the impulse's bias p^A = (−reach × n, −n) at `hit` and its share
+ * p^a = p^A + U D⁻¹ u, u = −Sᵀ p^A, handed to the parents; root to tip,
+ * Δq̇ = D⁻¹ (u − Uᵀ a'). The kinetic energy changes by −v_n² / (2 n · Δv(n)) ≤ 0. */
+template<class R>
+void stop_at_contact(const Link<R> *chain, const StrandSolver::ArticulatedBody *chain_bodies,
+                     const int lane, const size_t n, const size_t hit, const rvec3 &n_out,
                      const MutableSpan<vec2> rates)
 {
+  const auto s_theta = [&](const size_t k) { return get(chain[k].s_theta, lane); };
+  const auto s_phi = [&](const size_t k) { return get(chain[k].s_phi, lane); };
+  const auto arm = [&](const size_t k) { return get(chain[k].arm, lane); };
+  const rvec3 reach = chain_bodies[hit].reach;
   /* The tip's velocity: Ω_k = Ω_{k-1} + S_k q̇_k, v(P_k) = v(P_{k-1}) + Ω_{k-1} × r_k. */
   rvec3 omega(0.0), v(0.0);
   for (size_t k = 0; k <= hit; k++) {
-    v += glm::cross(omega, chain[int64_t(k)].arm);
-    omega += double(rates[int64_t(k)].x) * chain[int64_t(k)].s_theta +
-             double(rates[int64_t(k)].y) * chain[int64_t(k)].s_phi;
+    v += glm::cross(omega, arm(k));
+    omega += double(rates[int64_t(k)].x) * s_theta(k) + double(rates[int64_t(k)].y) * s_phi(k);
   }
-  const double approach = glm::dot(n, v + glm::cross(omega, chain[int64_t(hit)].reach));
+  const double approach = glm::dot(n_out, v + glm::cross(omega, reach));
   if (!(approach < 0.0)) {
     return;
   }
   thread_local std::vector<rvec2> u;
   thread_local std::vector<rvec2> delta;
   u.assign(hit + 1, rvec2(0.0));
-  delta.resize(size_t(chain.size()));
-  rvec3 p_torque = -glm::cross(chain[int64_t(hit)].reach, n), p_force = -n;
+  delta.resize(n);
+  rvec3 p_torque = -glm::cross(reach, n_out), p_force = -n_out;
   for (size_t k = hit + 1; k-- > 0;) {
-    const Body &body = chain[int64_t(k)];
-    u[k] = -rvec2(glm::dot(body.s_theta, p_torque), glm::dot(body.s_phi, p_torque));
-    const rvec2 du = body.d_inverse * u[k];
-    const rvec3 pa_torque = p_torque + du.x * body.u_angular[0] + du.y * body.u_angular[1];
-    const rvec3 pa_force = p_force + du.x * body.u_linear[0] + du.y * body.u_linear[1];
-    p_torque = pa_torque + glm::cross(body.arm, pa_force);
+    const Link<R> &body = chain[k];
+    const rmat2 d_inverse = get(body.d_inverse, lane);
+    const rvec3 u_angular[2] = {get(body.u_angular[0], lane), get(body.u_angular[1], lane)};
+    const rvec3 u_linear[2] = {get(body.u_linear[0], lane), get(body.u_linear[1], lane)};
+    u[k] = -rvec2(glm::dot(s_theta(k), p_torque), glm::dot(s_phi(k), p_torque));
+    const rvec2 du = d_inverse * u[k];
+    const rvec3 pa_torque = p_torque + du.x * u_angular[0] + du.y * u_angular[1];
+    const rvec3 pa_force = p_force + du.x * u_linear[0] + du.y * u_linear[1];
+    p_torque = pa_torque + glm::cross(arm(k), pa_force);
     p_force = pa_force;
   }
   rvec3 alpha(0.0), acceleration(0.0), tip_change(0.0);
-  for (size_t k = 0; k < size_t(chain.size()); k++) {
-    const Body &body = chain[int64_t(k)];
-    acceleration += glm::cross(alpha, body.arm);
-    const rvec2 ut_a(
-        glm::dot(body.u_angular[0], alpha) + glm::dot(body.u_linear[0], acceleration),
-        glm::dot(body.u_angular[1], alpha) + glm::dot(body.u_linear[1], acceleration));
-    delta[k] = body.d_inverse * ((k <= hit ? u[k] : rvec2(0.0)) - ut_a);
-    alpha += delta[k].x * body.s_theta + delta[k].y * body.s_phi;
+  for (size_t k = 0; k < n; k++) {
+    const Link<R> &body = chain[k];
+    const rvec3 u_angular[2] = {get(body.u_angular[0], lane), get(body.u_angular[1], lane)};
+    const rvec3 u_linear[2] = {get(body.u_linear[0], lane), get(body.u_linear[1], lane)};
+    acceleration += glm::cross(alpha, arm(k));
+    const rvec2 ut_a(glm::dot(u_angular[0], alpha) + glm::dot(u_linear[0], acceleration),
+                     glm::dot(u_angular[1], alpha) + glm::dot(u_linear[1], acceleration));
+    delta[k] = get(body.d_inverse, lane) * ((k <= hit ? u[k] : rvec2(0.0)) - ut_a);
+    alpha += delta[k].x * s_theta(k) + delta[k].y * s_phi(k);
     if (k == hit) {
-      tip_change = acceleration + glm::cross(alpha, body.reach);
+      tip_change = acceleration + glm::cross(alpha, reach);
     }
   }
-  const double response = glm::dot(n, tip_change);
+  const double response = glm::dot(n_out, tip_change);
   if (!(response > 0.0)) {
     return;
   }
   const double lambda = -approach / response;
-  for (size_t k = 0; k < size_t(chain.size()); k++) {
+  for (size_t k = 0; k < n; k++) {
     rates[int64_t(k)] += vec2(lambda * delta[k]);
   }
 }
@@ -248,48 +411,29 @@ bool StrandSolver::advance_articulated(const int64_t curve, const Substep &subst
   return true;
 }
 
-bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
-                                    const mat3 &root_frame, const vec3 &wind_wo, Counts &counts,
-                                    int *r_steps)
+float StrandSolver::articulated_forward(const int64_t curve, const Substep &substep,
+                                        const mat3 &root_frame, const vec3 &wind_wo,
+                                        const Span<vec2> mid_rates_accelerations,
+                                        const bool shape, ArticulatedBody *chain_bodies,
+                                        Counts &counts) const
 {
-  const IndexRange points = curve_points(curve_offsets_, curve);
-  const float h = substep.h;
-  const float inv_h = 1.0f / h;
-  const size_t first = size_t(points.start) + 1;
-  const size_t end = size_t(points.one_after_last());
-  bodies.resize(end - first);
-  const float density = line_density();
-  const bool implicit = params_.integrator == Integrator::Implicit;
-  const vec3 head_center = substep.pose.translation;
-  /* The mid-step rates' q̈ (see the top): the last two steps' extrapolated, or a predictor
-   * stage's when they are not both known (a state was set, a pass's changes or contact
-   * impulses broke the trend). */
-  uint8_t &known = accelerations_known_[size_t(curve)];
-  const bool predict = known < 2;
-  mid_accelerations.resize(end - first);
-  for (size_t i = first; i < end; i++) {
-    mid_accelerations[i - first] =
-        predict ? vec2(0.0f) : 1.5f * accelerations_[i] - 0.5f * earlier_accelerations_[i];
-  }
-
-  mat3 frame;
-  vec3 node;
-  /* With a predictor, stage 0 finds q̈₀ and stage 1 takes the step; without, stage 1 alone.
-   * The shape and the inertias are found by the first stage run, which the second shares. */
-  for (int stage = predict ? 0 : 1; stage < 2; stage++) {
-  const bool predictor = stage == 0;
-  const bool shape = predictor || !predict;
   /* Pass 1, root to tip (Table 7.1, first loop): geometry, relative velocities, the velocity
    * products, each rod's inertia and its bias force with the external force F. */
-  frame = root_frame;
-  node = positions_wo_[size_t(points.start)];
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  const float h = substep.h;
+  const size_t first = size_t(points.start) + 1;
+  const size_t end = size_t(points.one_after_last());
+  const float density = line_density();
+  const bool implicit = params_.integrator == Integrator::Implicit;
+  mat3 frame = root_frame;
+  vec3 node = positions_wo_[size_t(points.start)];
   vec3 node_velocity(0.0f);   /* relative to the head */
   vec3 parent_omega(0.0f);    /* relative to the head */
   vec3 arm(0.0f);
   float fastest_turn = 0.0f; /* rad/s, of a segment or across a hinge */
-  Counts stage_counts;       /* the contacts, counted if the stage takes the step */
+  const vec3 head_center = substep.pose.translation;
   for (size_t i = first; i < end; i++) {
-    Body &body = bodies[i - first];
+    ArticulatedBody &body = chain_bodies[i - first];
     const float d = rest_lengths_[i];
     const float m = density * d;
     if (shape) {
@@ -304,7 +448,7 @@ bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
       body.reach = real(d * body.t);
     }
     const vec3 t = body.t;
-    const vec2 rate = angular_velocities_[i] + (0.5f * h) * mid_accelerations[i - first];
+    const vec2 rate = angular_velocities_[i] + (0.5f * h) * mid_rates_accelerations[i - first];
     const vec3 relative_turn = rate.x * body.e_theta - rate.y * body.pole;
     body.bias_angular = glm::cross(real(parent_omega), real(relative_turn)) -
                         double(rate.x * rate.y) * glm::cross(real(body.pole), body.s_theta);
@@ -331,7 +475,7 @@ bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
     }
     const vec3 force = segment_force(substep, i, center, center_velocity,
                                      body.touches ? &body.contact : nullptr, tip_velocity,
-                                     wind_wo, stage_counts);
+                                     wind_wo, counts);
 
     /* The rod's inertia about P_i: m d² / 3 about every axis through P_i, its own axis
      * included (see axial_inertia_share), and the gyroscopic torque ω × (I ω) of that
@@ -340,130 +484,59 @@ bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
     const double transverse = double(m) * d * d / 3.0;
     const double spinless = 1.0 - double(axial_inertia_share);
     const rvec3 t_real = real(t), omega_real = real(omega), half_real = real(half);
+    /* The hinge spring and damper, linearly implicit (see the top of the file). */
+    const double k = hinge_stiffness_[i];
+    const double gamma = double(params_.bending_damping) * k; /* Kelvin–Voigt: γ = τ k */
+    const double hd = h;
     if (shape) {
       body.a = transverse * (rmat3(1.0) - spinless * outer(t_real, t_real));
       body.b = double(m) * cross_matrix(half_real);
       body.c = rmat3(double(m));
+      body.armature = implicit ? hd * gamma + hd * hd * k : 0.0;
     }
     body.p_torque = -(spinless * transverse) * glm::dot(t_real, omega_real) *
                         glm::cross(omega_real, t_real) -
                     glm::cross(half_real, real(force));
     body.p_force = double(m) * glm::cross(omega_real, glm::cross(omega_real, half_real)) -
                    real(force);
+    body.hinge_torque = -k * rvec2(angles_[i]) -
+                        (implicit ? gamma + hd * k : gamma) * rvec2(angular_velocities_[i]);
 
     parent_omega = omega;
     arm = d * t;
   }
+  return fastest_turn;
+}
 
-  if (shape && r_steps != nullptr && h * fastest_turn > max_turn_per_step) {
-    *r_steps = std::min(int(std::ceil(h * fastest_turn / max_turn_per_step)), max_turn_steps);
-    return true;
-  }
-  if (!predictor) {
-    counts.contacts += stage_counts.contacts;
-  }
-
-  /* Pass 2, tip to root (Table 7.1, second loop): U = I^A S, D = Sᵀ U + armature,
-   * u = τ − Sᵀ p^A; the body's articulated inertia and bias less what its hinge absorbs,
-   * I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the parent's hinge point.
-   * U, D and I^a depend on the shape and the step alone: the first stage computes them, and
-   * a second only carries the bias forces. */
-  for (size_t i = end; i-- > first;) {
-    Body &body = bodies[i - first];
-    const rvec3 axes[2] = {body.s_theta, body.s_phi};
-    const double k = hinge_stiffness_[i];
-    const double gamma = double(params_.bending_damping) * k; /* Kelvin–Voigt: γ = τ k */
-    const rvec2 q(angles_[i]);
-    const rvec2 rate(angular_velocities_[i]);
-    const double hd = h;
-    /* The hinge spring and damper, linearly implicit (see the top of the file). */
-    const rvec2 hinge_torque = -k * q - (implicit ? gamma + hd * k : gamma) * rate;
-    if (shape) {
-      for (int j = 0; j < 2; j++) {
-        body.u_angular[j] = body.a * axes[j];
-        body.u_linear[j] = glm::transpose(body.b) * axes[j];
-      }
-      const double armature = implicit ? hd * gamma + hd * hd * k : 0.0;
-      rmat2 d_matrix(glm::dot(axes[0], body.u_angular[0]), glm::dot(axes[1], body.u_angular[0]),
-                     glm::dot(axes[0], body.u_angular[1]), glm::dot(axes[1], body.u_angular[1]));
-      d_matrix[0][0] += armature;
-      d_matrix[1][1] += armature;
-      body.d_inverse = glm::inverse(d_matrix);
-    }
-    body.u = hinge_torque - rvec2(glm::dot(axes[0], body.p_torque),
-                                  glm::dot(axes[1], body.p_torque));
-    if (i == first) {
-      break;
-    }
-    const rmat2 &di = body.d_inverse;
-    Body &parent = bodies[i - 1 - first];
-    if (shape) {
-      /* I^a = I^A − U D⁻¹ Uᵀ, blockwise. */
-      const rvec3 wa0 = di[0][0] * body.u_angular[0] + di[0][1] * body.u_angular[1];
-      const rvec3 wa1 = di[1][0] * body.u_angular[0] + di[1][1] * body.u_angular[1];
-      const rvec3 wl0 = di[0][0] * body.u_linear[0] + di[0][1] * body.u_linear[1];
-      const rvec3 wl1 = di[1][0] * body.u_linear[0] + di[1][1] * body.u_linear[1];
-      /* U D⁻¹ Uᵀ = Σ_jk U_j (D⁻¹)_jk U_kᵀ = Σ_k (U D⁻¹)_k U_kᵀ. */
-      body.ra = body.a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
-      body.rb = body.b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
-      body.rc = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
-      /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c,
-       * c. */
-      const rmat3 rc = cross_times(body.arm, body.rc);
-      const rmat3 br = times_cross(body.rb, body.arm);
-      parent.a += body.ra - br + glm::transpose(-br) - times_cross(rc, body.arm);
-      parent.b += body.rb + rc;
-      parent.c += body.rc;
-    }
-    const rmat3 &a = body.ra, &b = body.rb, &c = body.rc;
-    const rvec2 du = di * body.u;
-    const rvec3 pa_torque = body.p_torque + a * body.bias_angular + b * body.bias_linear +
-                            du.x * body.u_angular[0] + du.y * body.u_angular[1];
-    const rvec3 pa_force = body.p_force + glm::transpose(b) * body.bias_angular +
-                           c * body.bias_linear + du.x * body.u_linear[0] +
-                           du.y * body.u_linear[1];
-    parent.p_torque += pa_torque + glm::cross(body.arm, pa_force);
-    parent.p_force += pa_force;
-  }
-
-  /* Pass 3, root to tip (Table 7.1, third loop): q̈ = D⁻¹ (u − Uᵀ a'), with a' the parent's
-   * acceleration moved to this hinge plus c; the root is fixed in the head's frame. Then
-   * q̇ += h q̈, q += h q̇ (semi-implicit Euler; the springs already implicit through D). */
-  rvec3 parent_alpha(0.0);
-  rvec3 parent_acceleration(0.0);
+bool StrandSolver::articulated_commit(const int64_t curve, const Substep &substep,
+                                      const mat3 &root_frame, const Span<vec2> step_accelerations)
+{
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  const float h = substep.h;
+  const float inv_h = 1.0f / h;
+  const size_t first = size_t(points.start) + 1;
+  const size_t end = size_t(points.one_after_last());
+  /* q̇ += h q̈, q += h q̇ (semi-implicit Euler; the springs already implicit through D). */
   for (size_t i = first; i < end; i++) {
-    const Body &body = bodies[i - first];
-    const rvec3 alpha = parent_alpha + body.bias_angular;
-    const rvec3 acceleration = parent_acceleration + glm::cross(parent_alpha, body.arm) +
-                               body.bias_linear;
-    const rvec2 ut_a(
-        glm::dot(body.u_angular[0], alpha) + glm::dot(body.u_linear[0], acceleration),
-        glm::dot(body.u_angular[1], alpha) + glm::dot(body.u_linear[1], acceleration));
-    const rvec2 q_acceleration = body.d_inverse * (body.u - ut_a);
-    parent_alpha = alpha + q_acceleration.x * body.s_theta + q_acceleration.y * body.s_phi;
-    parent_acceleration = acceleration;
-    if (predictor) {
-      mid_accelerations[i - first] = vec2(q_acceleration);
-      continue;
-    }
+    const vec2 q_acceleration = step_accelerations[int64_t(i - first)];
     earlier_accelerations_[i] = accelerations_[i];
-    accelerations_[i] = vec2(q_acceleration);
+    accelerations_[i] = q_acceleration;
     vec2 &omega = angular_velocities_[i];
-    omega += h * vec2(q_acceleration);
+    omega += h * q_acceleration;
     if (!(std::abs(omega.x) + std::abs(omega.y) < runaway_speed / rest_lengths_[i])) {
       return false; /* Runaway or not a number: caught before it reaches a collider. */
     }
     angles_[i] += h * omega;
   }
-  }
+  uint8_t &known = accelerations_known_[size_t(curve)];
   known = uint8_t(std::min(known + 1, 2));
 
   /* The new shape, root to tip, with the no-penetration projection (Ward & Lin 2003 §5.5);
-   * then the impulses that stop the projected tips' motion into the surfaces. */
-  thread_local std::vector<std::pair<size_t, vec3>> stops; /* body, outward normal */
+   * the caller then applies the impulses that stop the projected tips' motion into the
+   * surfaces (`stops`). */
   stops.clear();
-  frame = root_frame;
-  node = positions_wo_[size_t(points.start)];
+  mat3 frame = root_frame;
+  vec3 node = positions_wo_[size_t(points.start)];
   /* A projected segment turns alone: its child keeps the direction it had (its hinge takes
    * the turn back), so the strand beyond moves by the tip's small displacement instead of
    * swinging about the projected segment's root. Swinging it, a strand lying on the head
@@ -485,8 +558,7 @@ bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
     if (project_segment(substep, node, tip, d, chart, angles_[i], angular_velocities_[i],
                         &normal))
     {
-      counts.projections++;
-      angular_velocities_[i] = rate; /* stop_at_contact stops it */
+      angular_velocities_[i] = rate; /* the impulse stops it */
       stops.emplace_back(i - first, normal);
       deflection = Deflection(angles_[i]);
       frame = deflection.rotate(chart);
@@ -504,12 +576,121 @@ bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
   if (!stops.empty()) {
     known = 0; /* the impulses change the rates at once: no trend to extrapolate */
   }
+  return true;
+}
+
+bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
+                                    const mat3 &root_frame, const vec3 &wind_wo, Counts &counts,
+                                    int *r_steps)
+{
+  const IndexRange points = curve_points(curve_offsets_, curve);
+  const float h = substep.h;
+  const size_t first = size_t(points.start) + 1;
+  const size_t n = size_t(points.size) - 1;
+  bodies.resize(n);
+  links.resize(n);
+  accelerations.resize(n);
+  /* The mid-step rates' q̈ (see the top): the last two steps' extrapolated, or a predictor
+   * stage's when they are not both known (a state was set, a pass's changes or contact
+   * impulses broke the trend). */
+  const bool predict = accelerations_known_[size_t(curve)] < 2;
+  mid_accelerations.resize(n);
+  for (size_t i = 0; i < n; i++) {
+    mid_accelerations[i] = predict ? vec2(0.0f) :
+                                     1.5f * accelerations_[first + i] -
+                                         0.5f * earlier_accelerations_[first + i];
+  }
+  /* With a predictor, stage 0 finds q̈₀ and stage 1 takes the step; without, stage 1 alone.
+   * The shape and the inertias are found by the first stage run, which the second shares. */
+  for (int stage = predict ? 0 : 1; stage < 2; stage++) {
+    const bool predictor = stage == 0;
+    const bool shape = predictor || !predict;
+    Counts stage_counts; /* the contacts, counted if the stage takes the step */
+    const float fastest_turn = articulated_forward(curve, substep, root_frame, wind_wo,
+                                                   mid_accelerations, shape, bodies.data(),
+                                                   stage_counts);
+    if (shape && r_steps != nullptr && h * fastest_turn > max_turn_per_step) {
+      *r_steps = std::min(int(std::ceil(h * fastest_turn / max_turn_per_step)), max_turn_steps);
+      return true;
+    }
+    if (!predictor) {
+      counts.contacts += stage_counts.contacts;
+    }
+    for (size_t i = 0; i < n; i++) {
+      load(links[i], 0, bodies[i], shape);
+    }
+    tip_to_root(links.data(), n, shape);
+    root_to_tip(links.data(), n);
+    for (size_t i = 0; i < n; i++) {
+      (predictor ? mid_accelerations : accelerations)[i] = vec2(get(links[i].acceleration, 0));
+    }
+  }
+  if (!articulated_commit(curve, substep, root_frame, accelerations)) {
+    return false;
+  }
+  counts.projections += int64_t(stops.size());
   for (const auto &[body, normal] : stops) {
-    stop_at_contact(bodies, body, real(normal),
-                    MutableSpan<vec2>(angular_velocities_).slice(int64_t(first),
-                                                                 int64_t(end - first)));
+    stop_at_contact(links.data(), bodies.data(), 0, n, body, real(normal),
+                    MutableSpan<vec2>(angular_velocities_).slice(int64_t(first), int64_t(n)));
   }
   return true;
+}
+
+void StrandSolver::articulated_step_lanes(const Span<int64_t> curves, const Substep &substep,
+                                          const Span<mat3> root_frames, const Span<vec3> winds,
+                                          Counts &counts, const MutableSpan<LaneOutcome> r_outcomes)
+{
+  static_assert(lane_width == chain_lanes);
+  assert(curves.size() <= lane_width);
+  const int lanes_num = int(curves.size());
+  const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
+  lane_links.resize(n);
+  accelerations.resize(n);
+  mid_accelerations.resize(n);
+  Counts lane_counts[lane_width];
+  for (int lane = 0; lane < lanes_num; lane++) {
+    const int64_t curve = curves[lane];
+    assert(accelerations_known_[size_t(curve)] == 2);
+    const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
+    for (size_t i = 0; i < n; i++) {
+      mid_accelerations[i] = 1.5f * accelerations_[first + i] -
+                             0.5f * earlier_accelerations_[first + i];
+    }
+    lane_bodies[lane].resize(n);
+    const float fastest_turn = articulated_forward(curve, substep, root_frames[lane],
+                                                   winds[lane], mid_accelerations, true,
+                                                   lane_bodies[lane].data(), lane_counts[lane]);
+    r_outcomes[lane] = substep.h * fastest_turn > max_turn_per_step ? LaneOutcome::Left :
+                                                                     LaneOutcome::Stepped;
+  }
+  for (int lane = 0; lane < lane_width; lane++) {
+    /* A lane without a strand repeats the first strand; its result is dropped. */
+    const std::vector<ArticulatedBody> &source = lane_bodies[lane < lanes_num ? lane : 0];
+    for (size_t i = 0; i < n; i++) {
+      load(lane_links[i], lane, source[i], true);
+    }
+  }
+  recursion_lanes(lane_links.data(), n);
+  for (int lane = 0; lane < lanes_num; lane++) {
+    if (r_outcomes[lane] == LaneOutcome::Left) {
+      continue; /* unchanged: advance_articulated cuts its substep */
+    }
+    const int64_t curve = curves[lane];
+    const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
+    counts.contacts += lane_counts[lane].contacts;
+    for (size_t i = 0; i < n; i++) {
+      accelerations[i] = vec2(get(lane_links[i].acceleration, lane));
+    }
+    if (!articulated_commit(curve, substep, root_frames[lane], accelerations)) {
+      r_outcomes[lane] = LaneOutcome::Diverged;
+      continue;
+    }
+    counts.projections += int64_t(stops.size());
+    for (const auto &[body, normal] : stops) {
+      stop_at_contact(lane_links.data(), lane_bodies[lane].data(), lane, n, body, real(normal),
+                      MutableSpan<vec2>(angular_velocities_).slice(int64_t(first), int64_t(n)));
+    }
+  }
 }
 
 }  // namespace hairdyn

@@ -80,6 +80,7 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
   accelerations_.assign(points, vec2(0.0f));
   earlier_accelerations_.assign(points, vec2(0.0f));
   accelerations_known_.assign(size_t(curves_num()), 0);
+  group_strands();
   trig_.assign(points, vec4(0.0f, 1.0f, 0.0f, 1.0f));
   hinge_steps_.assign(points, HingeStep<vec2>{vec2(0.0f), vec2(0.0f)});
   hinge_stiffness_.assign(points, 0.0f);
@@ -185,6 +186,28 @@ void StrandSolver::set_stepped(const Span<uint8_t> stepped)
     if (stepped[curve]) {
       stepped_curves_.push_back(curve);
     }
+  }
+  group_strands();
+}
+
+void StrandSolver::group_strands()
+{
+  /* Each strand joins the open group of its point count, in the order the strands come; a
+   * full group closes. The groups are the same whatever the thread count. */
+  groups_.clear();
+  std::unordered_map<int32_t, size_t> open; /* point count -> group */
+  const bool masked = !stepped_.empty();
+  const int64_t stepped_num = masked ? int64_t(stepped_curves_.size()) : curves_num();
+  for (int64_t index = 0; index < stepped_num; index++) {
+    const int64_t curve = masked ? stepped_curves_[size_t(index)] : index;
+    const int32_t points_num = curve_offsets_[size_t(curve + 1)] - curve_offsets_[size_t(curve)];
+    auto [slot, fresh] = open.try_emplace(points_num, groups_.size());
+    if (fresh || groups_[slot->second].size == chain_lanes) {
+      slot->second = groups_.size();
+      groups_.emplace_back();
+    }
+    StrandGroup &group = groups_[slot->second];
+    group.curves[group.size++] = curve;
   }
 }
 
@@ -369,27 +392,95 @@ bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec
   return moved;
 }
 
-bool StrandSolver::advance_strand(const int64_t curve, const Substep &substep, Counts &counts)
+vec3 StrandSolver::place_root(const int64_t curve, const Substep &substep, mat3 &r_frame)
 {
-  const IndexRange points = curve_points(curve_offsets_, curve);
-  const size_t root = size_t(points.start);
+  const size_t root = size_t(curve_offsets_[size_t(curve)]);
   /* The root frame and root are carried rigidly by the head. */
-  const mat3 frame = substep.rotation * root_frames_head_[size_t(curve)];
+  r_frame = substep.rotation * root_frames_head_[size_t(curve)];
   const vec3 node = substep.pose.transform_point(root_positions_head_[size_t(curve)]);
   const vec3 node_velocity = (node - positions_wo_[root]) / substep.h;
   positions_wo_[root] = node;
   velocities_wo_[root] = node_velocity;
-  root_frames_wo_[size_t(curve)] = frame;
-  const vec3 wind_wo = wind_.velocity_at(node, substep.time);
+  root_frames_wo_[size_t(curve)] = r_frame;
+  return wind_.velocity_at(node, substep.time);
+}
+
+bool StrandSolver::advance_strand(const int64_t curve, const Substep &substep, Counts &counts)
+{
+  mat3 frame;
+  const vec3 wind_wo = place_root(curve, substep, frame);
+  const IndexRange points = curve_points(curve_offsets_, curve);
   const bool finite = params_.model == StrandModel::Kurihara1993 ?
-                          advance_kurihara(points, substep, frame, node_velocity, wind_wo,
+                          advance_kurihara(points, substep, frame,
+                                           velocities_wo_[size_t(points.start)], wind_wo,
                                            counts) :
                           advance_articulated(curve, substep, frame, wind_wo, counts);
-  if (!finite) {
-    counts.diverged++;
-    place_at_rest(curve, substep.pose);
+  return finite || diverged(curve, substep, counts);
+}
+
+bool StrandSolver::diverged(const int64_t curve, const Substep &substep, Counts &counts)
+{
+  counts.diverged++;
+  place_at_rest(curve, substep.pose);
+  return false;
+}
+
+void StrandSolver::advance_strands(const Span<int64_t> curves, const Substep &substep,
+                                   Counts &counts, const MutableSpan<uint8_t> r_finite)
+{
+  if (params_.model != StrandModel::Articulated || curves.size() < 2) {
+    for (int64_t lane = 0; lane < curves.size(); lane++) {
+      r_finite[lane] = advance_strand(curves[lane], substep, counts);
+    }
+    return;
   }
-  return finite;
+  /* The strands whose last two accelerations are known step together, their recursions in
+   * one vector (articulated_step_lanes); the others, and any that turns too fast for one
+   * step, alone. */
+  int64_t together[chain_lanes], lane_of[chain_lanes];
+  mat3 frames[chain_lanes];
+  vec3 winds[chain_lanes];
+  int64_t together_num = 0;
+  for (int64_t lane = 0; lane < curves.size(); lane++) {
+    const int64_t curve = curves[lane];
+    mat3 frame;
+    const vec3 wind_wo = place_root(curve, substep, frame);
+    if (accelerations_known_[size_t(curve)] == 2) {
+      together[together_num] = curve;
+      lane_of[together_num] = lane;
+      frames[together_num] = frame;
+      winds[together_num++] = wind_wo;
+    }
+    else {
+      r_finite[lane] = advance_articulated(curve, substep, frame, wind_wo, counts) ||
+                       diverged(curve, substep, counts);
+    }
+  }
+  LaneOutcome outcomes[chain_lanes];
+  if (together_num > 1) {
+    articulated_step_lanes(Span<int64_t>(together, together_num), substep,
+                           Span<mat3>(frames, together_num), Span<vec3>(winds, together_num),
+                           counts, MutableSpan<LaneOutcome>(outcomes, together_num));
+  }
+  else {
+    std::fill_n(outcomes, together_num, LaneOutcome::Left);
+  }
+  for (int64_t k = 0; k < together_num; k++) {
+    const int64_t curve = together[k];
+    switch (outcomes[k]) {
+      case LaneOutcome::Stepped:
+        r_finite[lane_of[k]] = 1;
+        break;
+      case LaneOutcome::Left:
+        r_finite[lane_of[k]] = advance_articulated(curve, substep, frames[k], winds[k],
+                                                   counts) ||
+                               diverged(curve, substep, counts);
+        break;
+      case LaneOutcome::Diverged:
+        r_finite[lane_of[k]] = diverged(curve, substep, counts);
+        break;
+    }
+  }
 }
 
 void StrandSolver::pin_strand(const int64_t curve, const Substep &substep)
@@ -550,7 +641,10 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
   const int64_t grain = 32;
   const bool masked = !stepped_.empty();
   const int64_t stepped_num = masked ? int64_t(stepped_curves_.size()) : curves_num();
-  std::vector<Counts> counts(size_t((stepped_num + grain - 1) / grain));
+  const int64_t groups_num = int64_t(groups_.size());
+  const int64_t group_grain = grain / chain_lanes;
+  std::vector<Counts> counts(size_t(std::max((stepped_num + grain - 1) / grain,
+                                             (groups_num + group_grain - 1) / group_grain)));
   const auto for_each_curve = [&](auto &&fn) {
     parallel_for(stepped_num, grain, [&](const IndexRange range) {
       Counts &chunk = counts[size_t(range.start / grain)];
@@ -559,26 +653,51 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
       }
     });
   };
+  /* fn(group, counts) for each group of strands (group_strands): the strands advance a group
+   * at a time. */
+  const auto for_each_group = [&](auto &&fn) {
+    parallel_for(groups_num, group_grain, [&](const IndexRange range) {
+      Counts &chunk = counts[size_t(range.start / group_grain)];
+      for (int64_t index = range.start; index < range.one_after_last(); index++) {
+        fn(groups_[size_t(index)], chunk);
+      }
+    });
+  };
   std::fill(pass_ms_.begin(), pass_ms_.end(), 0.0);
   if (passes_.empty()) {
-    /* Strands are independent between passes: each runs all its substeps in a row (the same
-     * result as substep by substep, with its data hot in cache). */
-    for_each_curve([&](const int64_t curve, Counts &chunk) {
-      prepare_strand(curve, substeps[0].h);
-      const IndexRange points = curve_points(curve_offsets_, curve);
+    /* Strands are independent between passes: each group runs all its substeps in a row (the
+     * same result as substep by substep, with its data hot in cache). A strand that diverged
+     * sits out the frame's remaining substeps. */
+    for_each_group([&](const StrandGroup &group, Counts &chunk) {
+      int64_t active[chain_lanes];
+      int64_t active_num = group.size;
+      std::copy_n(group.curves, group.size, active);
+      for (int64_t k = 0; k < active_num; k++) {
+        prepare_strand(active[k], substeps[0].h);
+      }
       for (const Substep &substep : substeps) {
-        if (!advance_strand(curve, substep, chunk)) {
-          break;
-        }
-        if (has_pins(curve)) {
-          std::copy_n(&positions_wo_[size_t(points.start)], points.size,
-                      &positions_before_[size_t(points.start)]);
-          std::copy_n(&velocities_wo_[size_t(points.start)], points.size,
-                      &velocities_before_[size_t(points.start)]);
-          if (!settle_strand(curve, substep, chunk)) {
-            break;
+        uint8_t finite[chain_lanes];
+        advance_strands(Span<int64_t>(active, active_num), substep, chunk,
+                        MutableSpan<uint8_t>(finite, active_num));
+        int64_t kept = 0;
+        for (int64_t k = 0; k < active_num; k++) {
+          const int64_t curve = active[k];
+          if (!finite[k]) {
+            continue;
           }
+          if (has_pins(curve)) {
+            const IndexRange points = curve_points(curve_offsets_, curve);
+            std::copy_n(&positions_wo_[size_t(points.start)], points.size,
+                        &positions_before_[size_t(points.start)]);
+            std::copy_n(&velocities_wo_[size_t(points.start)], points.size,
+                        &velocities_before_[size_t(points.start)]);
+            if (!settle_strand(curve, substep, chunk)) {
+              continue;
+            }
+          }
+          active[kept++] = curve;
         }
+        active_num = kept;
       }
     });
   }
@@ -587,21 +706,25 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
     std::vector<uint8_t> diverged(size_t(curves_num()), 0);
     for (const Substep &substep : substeps) {
       positions_start_ = positions_wo_;
-      /* fn(curve, substep, counts) for each strand that has not diverged; one that has stays
-       * on its rest shape, carried by the head, whatever the passes do to its nodes, until the
-       * frame ends (the next frame starts it from there). */
-      const auto unless_diverged = [&](const auto &fn) {
-        for_each_curve([&](const int64_t curve, Counts &chunk) {
-          if (diverged[size_t(curve)]) {
-            place_at_rest(curve, substep.pose);
+      /* A strand that has diverged stays on its rest shape, carried by the head, whatever the
+       * passes do to its nodes, until the frame ends (the next frame starts it from there). */
+      for_each_group([&](const StrandGroup &group, Counts &chunk) {
+        int64_t live[chain_lanes];
+        int64_t live_num = 0;
+        for (int64_t k = 0; k < group.size; k++) {
+          if (diverged[size_t(group.curves[k])]) {
+            place_at_rest(group.curves[k], substep.pose);
           }
-          else if (!fn(curve, substep, chunk)) {
-            diverged[size_t(curve)] = 1;
+          else {
+            live[live_num++] = group.curves[k];
           }
-        });
-      };
-      unless_diverged([&](const int64_t curve, const Substep &s, Counts &chunk) {
-        return advance_strand(curve, s, chunk);
+        }
+        uint8_t finite[chain_lanes];
+        advance_strands(Span<int64_t>(live, live_num), substep, chunk,
+                        MutableSpan<uint8_t>(finite, live_num));
+        for (int64_t k = 0; k < live_num; k++) {
+          diverged[size_t(live[k])] = finite[k] ? 0 : 1;
+        }
       });
       positions_before_ = positions_wo_;
       velocities_before_ = velocities_wo_;
@@ -635,8 +758,13 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
           }
         });
       }
-      unless_diverged([&](const int64_t curve, const Substep &s, Counts &chunk) {
-        return settle_strand(curve, s, chunk);
+      for_each_curve([&](const int64_t curve, Counts &chunk) {
+        if (diverged[size_t(curve)]) {
+          place_at_rest(curve, substep.pose);
+        }
+        else if (!settle_strand(curve, substep, chunk)) {
+          diverged[size_t(curve)] = 1;
+        }
       });
     }
   }

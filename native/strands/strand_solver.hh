@@ -233,6 +233,9 @@ class StrandSolver {
   /* m, the fixed length of the segment ending at `point`. */
   float segment_length(int64_t point) const { return rest_lengths_[size_t(point)]; }
 
+ /* A body of the articulated chain during a step (strand_dynamics_articulated.cpp). */
+  struct ArticulatedBody;
+
  private:
   struct Counts {
     int64_t contacts = 0;
@@ -246,9 +249,20 @@ class StrandSolver {
   void place_at_rest(int64_t curve, const HeadPose &pose);
   /* Per-strand coefficients that stay fixed over one step of substeps of length h. */
   void prepare_strand(int64_t curve, float h);
+  /* Strand `curve`'s root and root frame (r_frame) carried by the head to the end of the
+   * substep; returns the wind at the root. */
+  vec3 place_root(int64_t curve, const Substep &substep, mat3 &r_frame);
   /* One substep of one strand: the root carried by the head, then the model's dynamics.
    * Returns false when the strand diverged (it is then put back at rest). */
   bool advance_strand(int64_t curve, const Substep &substep, Counts &counts);
+  /* The strand diverged: counted and put at rest. Returns false. */
+  bool diverged(int64_t curve, const Substep &substep, Counts &counts);
+  /* advance_strand for each of `curves` (at most chain_lanes, one point count: a group of
+   * group_strands); r_finite[k] as it returns for curves[k]. */
+  void advance_strands(Span<int64_t> curves, const Substep &substep, Counts &counts,
+                       MutableSpan<uint8_t> r_finite);
+  /* The stepped strands in groups of one point count, up to chain_lanes each (groups_). */
+  void group_strands();
   /* Kurihara 1993 §2: each hinge alone (strand_dynamics_kurihara1993.cpp). */
   bool advance_kurihara(IndexRange points, const Substep &substep, mat3 frame,
                         vec3 node_velocity, const vec3 &wind_wo, Counts &counts);
@@ -263,6 +277,32 @@ class StrandSolver {
    * equal steps that keep every turn within the bound (at most max_turn_steps). */
   bool articulated_step(int64_t curve, const Substep &substep, const mat3 &root_frame,
                         const vec3 &wind_wo, Counts &counts, int *r_steps);
+  /* What articulated_step_lanes did with each strand. */
+  enum class LaneOutcome : uint8_t {
+    Stepped,
+    Left,     /* unchanged: it turns too fast for one step (advance_articulated cuts it) */
+    Diverged, /* it ran away (the caller puts it at rest) */
+  };
+  /* The step of substep.h of advance_articulated for up to chain::lane_width strands of one
+   * segment count whose last two steps' accelerations are known (no predictor), their
+   * double-precision recursions in one vector: each strand's bits are those of
+   * advance_articulated. */
+  void articulated_step_lanes(Span<int64_t> curves, const Substep &substep,
+                              Span<mat3> root_frames, Span<vec3> winds, Counts &counts,
+                              MutableSpan<LaneOutcome> r_outcomes);
+  /* Pass 1 of an articulated step, root to tip: the shape (with `shape`: each segment's frame,
+   * the tip's contact and the rod's inertia; else as the bodies hold it), the rates at the
+   * middle of the step (q̇ + h q̈ / 2 with q̈ = `mid_accelerations`), the velocity products,
+   * the external forces and the hinge torques. Returns the fastest turn (rad/s) of a segment
+   * or across a hinge. */
+  float articulated_forward(int64_t curve, const Substep &substep, const mat3 &root_frame,
+                            const vec3 &wind_wo, Span<vec2> mid_accelerations, bool shape,
+                            ArticulatedBody *chain_bodies, Counts &counts) const;
+  /* The step's hinge accelerations into rates and angles, then the new shape with the
+   * no-penetration projection; the projected segments are left in a list whose impulses the
+   * caller applies. False when the strand ran away. */
+  bool articulated_commit(int64_t curve, const Substep &substep, const mat3 &root_frame,
+                          Span<vec2> step_accelerations);
   /* Each pin of the strand to its rest position carried by the head at the end of the
    * substep, the chain before it reaching it (groom/pins.hh), positions and velocities only:
    * take_back_strand turns them into angles and rates. */
@@ -341,6 +381,14 @@ class StrandSolver {
   std::vector<int64_t> pin_offsets_;
   std::vector<int64_t> pins_;
   std::vector<vec3> pins_rest_head_;
+
+  /* Strands that the articulated model steps together (chain_lanes.hh: lane_width). */
+  static constexpr int chain_lanes = 4;
+  struct StrandGroup {
+    int64_t curves[chain_lanes];
+    int64_t size = 0;
+  };
+  std::vector<StrandGroup> groups_; /* the stepped strands, grouped (group_strands) */
 
   /* Per strand, the set_stepped mask (empty: all), and the strands the last step advanced. */
   std::vector<uint8_t> stepped_;

@@ -1,0 +1,179 @@
+#pragma once
+/* The articulated chain's double-precision algebra over a lane type R: R = double for one
+ * strand, or Lanes, lane_width doubles in one GCC/Clang vector, for lane_width strands of the
+ * same number of segments stepped together (strand_dynamics_articulated.cpp).
+ *
+ * Every operation is written as glm evaluates it on dvec3, dmat3, dvec2 and dmat2 (the same
+ * products, summed in the same order), each lane on its own, and none is fused: the core
+ * builds as ISO C++, where GCC contracts no multiply-add. So a strand's step gives the same
+ * bits in any lane of a vector as alone, whatever the instruction set the vector code was
+ * compiled for (test StrandsArticulated.LanesGiveEachStrandItsOwnBits). */
+#include "core/math.hh"
+
+/* Functions on Lanes are always inlined, so no vector crosses a call: the warning that one
+ * would pass differently with and without AVX does not apply. */
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace hairdyn::chain {
+
+constexpr int lane_width = 4;
+typedef double Lanes __attribute__((vector_size(lane_width * sizeof(double))));
+
+#define HAIRDYN_CHAIN_INLINE [[gnu::always_inline]] inline
+
+template<class R> struct V2 {
+  R x, y;
+};
+template<class R> struct V3 {
+  R x, y, z;
+};
+/* Column-major, as glm: c[column]. */
+template<class R> struct M2 {
+  V2<R> c[2];
+};
+template<class R> struct M3 {
+  V3<R> c[3];
+};
+
+/* One lane of R: its value, and writing it. */
+HAIRDYN_CHAIN_INLINE double get(const double x, int /*lane*/)
+{
+  return x;
+}
+HAIRDYN_CHAIN_INLINE double get(const Lanes &x, const int lane)
+{
+  return x[lane];
+}
+HAIRDYN_CHAIN_INLINE void put(double &x, int /*lane*/, const double value)
+{
+  x = value;
+}
+HAIRDYN_CHAIN_INLINE void put(Lanes &x, const int lane, const double value)
+{
+  x[lane] = value;
+}
+template<class R> HAIRDYN_CHAIN_INLINE glm::dvec2 get(const V2<R> &v, const int lane)
+{
+  return glm::dvec2(get(v.x, lane), get(v.y, lane));
+}
+template<class R> HAIRDYN_CHAIN_INLINE glm::dvec3 get(const V3<R> &v, const int lane)
+{
+  return glm::dvec3(get(v.x, lane), get(v.y, lane), get(v.z, lane));
+}
+template<class R> HAIRDYN_CHAIN_INLINE glm::dmat2 get(const M2<R> &m, const int lane)
+{
+  return glm::dmat2(get(m.c[0], lane), get(m.c[1], lane));
+}
+template<class R> HAIRDYN_CHAIN_INLINE void put(V2<R> &v, const int lane, const glm::dvec2 &value)
+{
+  put(v.x, lane, value.x);
+  put(v.y, lane, value.y);
+}
+template<class R> HAIRDYN_CHAIN_INLINE void put(V3<R> &v, const int lane, const glm::dvec3 &value)
+{
+  put(v.x, lane, value.x);
+  put(v.y, lane, value.y);
+  put(v.z, lane, value.z);
+}
+template<class R> HAIRDYN_CHAIN_INLINE void put(M3<R> &m, const int lane, const glm::dmat3 &value)
+{
+  for (int j = 0; j < 3; j++) {
+    put(m.c[j], lane, value[j]);
+  }
+}
+
+template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator+(const V2<R> &a, const V2<R> &b)
+{
+  return {a.x + b.x, a.y + b.y};
+}
+template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator-(const V2<R> &a, const V2<R> &b)
+{
+  return {a.x - b.x, a.y - b.y};
+}
+template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator+(const V3<R> &a, const V3<R> &b)
+{
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator-(const V3<R> &a, const V3<R> &b)
+{
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator-(const V3<R> &v)
+{
+  return {-v.x, -v.y, -v.z};
+}
+template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const R &s, const V3<R> &v)
+{
+  return {s * v.x, s * v.y, s * v.z};
+}
+template<class R> HAIRDYN_CHAIN_INLINE R dot(const V3<R> &a, const V3<R> &b)
+{
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+template<class R> HAIRDYN_CHAIN_INLINE V3<R> cross(const V3<R> &x, const V3<R> &y)
+{
+  return {x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y};
+}
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator+(const M3<R> &a, const M3<R> &b)
+{
+  return {{a.c[0] + b.c[0], a.c[1] + b.c[1], a.c[2] + b.c[2]}};
+}
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &a, const M3<R> &b)
+{
+  return {{a.c[0] - b.c[0], a.c[1] - b.c[1], a.c[2] - b.c[2]}};
+}
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &m)
+{
+  return {{-m.c[0], -m.c[1], -m.c[2]}};
+}
+/* m v */
+template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const M3<R> &m, const V3<R> &v)
+{
+  return {m.c[0].x * v.x + m.c[1].x * v.y + m.c[2].x * v.z,
+          m.c[0].y * v.x + m.c[1].y * v.y + m.c[2].y * v.z,
+          m.c[0].z * v.x + m.c[1].z * v.y + m.c[2].z * v.z};
+}
+/* mᵀ v */
+template<class R> HAIRDYN_CHAIN_INLINE V3<R> transpose_times(const M3<R> &m, const V3<R> &v)
+{
+  return {dot(m.c[0], v), dot(m.c[1], v), dot(m.c[2], v)};
+}
+/* mᵀ */
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> transpose(const M3<R> &m)
+{
+  return {{{m.c[0].x, m.c[1].x, m.c[2].x},
+           {m.c[0].y, m.c[1].y, m.c[2].y},
+           {m.c[0].z, m.c[1].z, m.c[2].z}}};
+}
+/* x yᵀ */
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> outer(const V3<R> &x, const V3<R> &y)
+{
+  return {{y.x * x, y.y * x, y.z * x}};
+}
+/* [v]× m and m [v]×, column by column (the products with cross_matrix(v) less its
+ * multiplications by zero). */
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> cross_times(const V3<R> &v, const M3<R> &m)
+{
+  return {{cross(v, m.c[0]), cross(v, m.c[1]), cross(v, m.c[2])}};
+}
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> times_cross(const M3<R> &m, const V3<R> &v)
+{
+  return {{v.z * m.c[1] - v.y * m.c[2], v.x * m.c[2] - v.z * m.c[0],
+           v.y * m.c[0] - v.x * m.c[1]}};
+}
+/* m v */
+template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator*(const M2<R> &m, const V2<R> &v)
+{
+  return {m.c[0].x * v.x + m.c[1].x * v.y, m.c[0].y * v.x + m.c[1].y * v.y};
+}
+template<class R> HAIRDYN_CHAIN_INLINE M2<R> inverse(const M2<R> &m)
+{
+  const R one_over_determinant = 1.0 / (m.c[0].x * m.c[1].y - m.c[1].x * m.c[0].y);
+  return {{{m.c[1].y * one_over_determinant, -m.c[0].y * one_over_determinant},
+           {-m.c[1].x * one_over_determinant, m.c[0].x * one_over_determinant}}};
+}
+
+}  // namespace hairdyn::chain
+
+#pragma GCC diagnostic pop
