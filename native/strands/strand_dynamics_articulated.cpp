@@ -411,6 +411,21 @@ bool StrandSolver::advance_articulated(const int64_t curve, const Substep &subst
   return true;
 }
 
+void StrandSolver::mid_step_accelerations(const int64_t curve,
+                                          const MutableSpan<vec2> r_accelerations) const
+{
+  /* The mid-step rates' q̈ (see the top): the last two steps' extrapolated, or zero for a
+   * predictor stage when they are not both known (a state was set, a pass's changes or
+   * contact impulses broke the trend). */
+  const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
+  const bool known = accelerations_known_[size_t(curve)] == 2;
+  for (int64_t i = 0; i < r_accelerations.size(); i++) {
+    r_accelerations[i] = known ? 1.5f * accelerations_[first + size_t(i)] -
+                                     0.5f * earlier_accelerations_[first + size_t(i)] :
+                                 vec2(0.0f);
+  }
+}
+
 float StrandSolver::articulated_forward(const int64_t curve, const Substep &substep,
                                         const mat3 &root_frame, const vec3 &wind_wo,
                                         const Span<vec2> mid_rates_accelerations,
@@ -590,16 +605,9 @@ bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
   bodies.resize(n);
   links.resize(n);
   accelerations.resize(n);
-  /* The mid-step rates' q̈ (see the top): the last two steps' extrapolated, or a predictor
-   * stage's when they are not both known (a state was set, a pass's changes or contact
-   * impulses broke the trend). */
   const bool predict = accelerations_known_[size_t(curve)] < 2;
   mid_accelerations.resize(n);
-  for (size_t i = 0; i < n; i++) {
-    mid_accelerations[i] = predict ? vec2(0.0f) :
-                                     1.5f * accelerations_[first + i] -
-                                         0.5f * earlier_accelerations_[first + i];
-  }
+  mid_step_accelerations(curve, mid_accelerations);
   /* With a predictor, stage 0 finds q̈₀ and stage 1 takes the step; without, stage 1 alone.
    * The shape and the inertias are found by the first stage run, which the second shares. */
   for (int stage = predict ? 0 : 1; stage < 2; stage++) {
@@ -644,33 +652,72 @@ void StrandSolver::articulated_step_lanes(const Span<int64_t> curves, const Subs
   assert(curves.size() <= lane_width);
   const int lanes_num = int(curves.size());
   const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
+  thread_local std::vector<vec2> lane_mid_accelerations[lane_width];
   lane_links.resize(n);
   accelerations.resize(n);
-  mid_accelerations.resize(n);
+  bool predict[lane_width];
+  int predicting_lane = -1;
+  for (int lane = 0; lane < lanes_num; lane++) {
+    predict[lane] = accelerations_known_[size_t(curves[lane])] < 2;
+    predicting_lane = predict[lane] && predicting_lane < 0 ? lane : predicting_lane;
+    lane_bodies[lane].resize(n);
+    lane_mid_accelerations[lane].resize(n);
+    r_outcomes[lane] = LaneOutcome::Stepped;
+  }
+  /* The stages of articulated_step, lane by lane: pass 1 for each strand, passes 2 and 3 for
+   * all in one vector. A lane whose strand has no part in a stage repeats another's (its
+   * result is dropped). Stage 0, for the strands whose trend is not known: the predictor's q̈
+   * at the step's start rates. (The second stage's recursion finds U, D and I^a again from
+   * the same shape, where articulated_step keeps the first's: the same values.) */
+  const auto recursion = [&](const auto &source_lane) {
+    for (int lane = 0; lane < lane_width; lane++) {
+      const std::vector<ArticulatedBody> &source = lane_bodies[source_lane(lane)];
+      for (size_t i = 0; i < n; i++) {
+        load(lane_links[i], lane, source[i], true);
+      }
+    }
+    recursion_lanes(lane_links.data(), n);
+  };
+  if (predicting_lane >= 0) {
+    for (int lane = 0; lane < lanes_num; lane++) {
+      if (predict[lane]) {
+        mid_step_accelerations(curves[lane], lane_mid_accelerations[lane]);
+        Counts predictor_counts; /* only the step's contacts count */
+        const float fastest_turn = articulated_forward(
+            curves[lane], substep, root_frames[lane], winds[lane], lane_mid_accelerations[lane],
+            true, lane_bodies[lane].data(), predictor_counts);
+        if (substep.h * fastest_turn > max_turn_per_step) {
+          r_outcomes[lane] = LaneOutcome::Left;
+        }
+      }
+    }
+    recursion([&](const int lane) {
+      return lane < lanes_num && predict[lane] ? lane : predicting_lane;
+    });
+    for (int lane = 0; lane < lanes_num; lane++) {
+      for (size_t i = 0; predict[lane] && i < n; i++) {
+        lane_mid_accelerations[lane][i] = vec2(get(lane_links[i].acceleration, lane));
+      }
+    }
+  }
+  /* Stage 1: the step. */
   Counts lane_counts[lane_width];
   for (int lane = 0; lane < lanes_num; lane++) {
-    const int64_t curve = curves[lane];
-    assert(accelerations_known_[size_t(curve)] == 2);
-    const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
-    for (size_t i = 0; i < n; i++) {
-      mid_accelerations[i] = 1.5f * accelerations_[first + i] -
-                             0.5f * earlier_accelerations_[first + i];
+    if (r_outcomes[lane] == LaneOutcome::Left) {
+      continue;
     }
-    lane_bodies[lane].resize(n);
-    const float fastest_turn = articulated_forward(curve, substep, root_frames[lane],
-                                                   winds[lane], mid_accelerations, true,
-                                                   lane_bodies[lane].data(), lane_counts[lane]);
-    r_outcomes[lane] = substep.h * fastest_turn > max_turn_per_step ? LaneOutcome::Left :
-                                                                     LaneOutcome::Stepped;
-  }
-  for (int lane = 0; lane < lane_width; lane++) {
-    /* A lane without a strand repeats the first strand; its result is dropped. */
-    const std::vector<ArticulatedBody> &source = lane_bodies[lane < lanes_num ? lane : 0];
-    for (size_t i = 0; i < n; i++) {
-      load(lane_links[i], lane, source[i], true);
+    if (!predict[lane]) {
+      mid_step_accelerations(curves[lane], lane_mid_accelerations[lane]);
+    }
+    /* A predicted strand keeps the shape (and the contacts) stage 0 found. */
+    const float fastest_turn = articulated_forward(
+        curves[lane], substep, root_frames[lane], winds[lane], lane_mid_accelerations[lane],
+        !predict[lane], lane_bodies[lane].data(), lane_counts[lane]);
+    if (!predict[lane] && substep.h * fastest_turn > max_turn_per_step) {
+      r_outcomes[lane] = LaneOutcome::Left;
     }
   }
-  recursion_lanes(lane_links.data(), n);
+  recursion([&](const int lane) { return lane < lanes_num ? lane : 0; });
   for (int lane = 0; lane < lanes_num; lane++) {
     if (r_outcomes[lane] == LaneOutcome::Left) {
       continue; /* unchanged: advance_articulated cuts its substep */

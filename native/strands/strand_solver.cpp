@@ -434,50 +434,29 @@ void StrandSolver::advance_strands(const Span<int64_t> curves, const Substep &su
     }
     return;
   }
-  /* The strands whose last two accelerations are known step together, their recursions in
-   * one vector (articulated_step_lanes); the others, and any that turns too fast for one
-   * step, alone. */
-  int64_t together[chain_lanes], lane_of[chain_lanes];
+  /* The strands step together, their recursions in one vector (articulated_step_lanes);
+   * one that turns too fast for one step, alone. */
   mat3 frames[chain_lanes];
   vec3 winds[chain_lanes];
-  int64_t together_num = 0;
   for (int64_t lane = 0; lane < curves.size(); lane++) {
-    const int64_t curve = curves[lane];
-    mat3 frame;
-    const vec3 wind_wo = place_root(curve, substep, frame);
-    if (accelerations_known_[size_t(curve)] == 2) {
-      together[together_num] = curve;
-      lane_of[together_num] = lane;
-      frames[together_num] = frame;
-      winds[together_num++] = wind_wo;
-    }
-    else {
-      r_finite[lane] = advance_articulated(curve, substep, frame, wind_wo, counts) ||
-                       diverged(curve, substep, counts);
-    }
+    winds[lane] = place_root(curves[lane], substep, frames[lane]);
   }
   LaneOutcome outcomes[chain_lanes];
-  if (together_num > 1) {
-    articulated_step_lanes(Span<int64_t>(together, together_num), substep,
-                           Span<mat3>(frames, together_num), Span<vec3>(winds, together_num),
-                           counts, MutableSpan<LaneOutcome>(outcomes, together_num));
-  }
-  else {
-    std::fill_n(outcomes, together_num, LaneOutcome::Left);
-  }
-  for (int64_t k = 0; k < together_num; k++) {
-    const int64_t curve = together[k];
-    switch (outcomes[k]) {
+  articulated_step_lanes(curves, substep, Span<mat3>(frames, curves.size()),
+                         Span<vec3>(winds, curves.size()), counts,
+                         MutableSpan<LaneOutcome>(outcomes, curves.size()));
+  for (int64_t lane = 0; lane < curves.size(); lane++) {
+    const int64_t curve = curves[lane];
+    switch (outcomes[lane]) {
       case LaneOutcome::Stepped:
-        r_finite[lane_of[k]] = 1;
+        r_finite[lane] = 1;
         break;
       case LaneOutcome::Left:
-        r_finite[lane_of[k]] = advance_articulated(curve, substep, frames[k], winds[k],
-                                                   counts) ||
-                               diverged(curve, substep, counts);
+        r_finite[lane] = advance_articulated(curve, substep, frames[lane], winds[lane], counts) ||
+                         diverged(curve, substep, counts);
         break;
       case LaneOutcome::Diverged:
-        r_finite[lane_of[k]] = diverged(curve, substep, counts);
+        r_finite[lane] = diverged(curve, substep, counts);
         break;
     }
   }

@@ -284,12 +284,14 @@ class StrandSolver {
     Diverged, /* it ran away (the caller puts it at rest) */
   };
   /* The step of substep.h of advance_articulated for up to chain::lane_width strands of one
-   * segment count whose last two steps' accelerations are known (no predictor), their
-   * double-precision recursions in one vector: each strand's bits are those of
-   * advance_articulated. */
+   * segment count, their double-precision recursions in one vector (the predictor stage's
+   * too): each strand's bits are those of advance_articulated. */
   void articulated_step_lanes(Span<int64_t> curves, const Substep &substep,
                               Span<mat3> root_frames, Span<vec3> winds, Counts &counts,
                               MutableSpan<LaneOutcome> r_outcomes);
+  /* The q̈ that the mid-step rates of strand `curve`'s next step take: the last two steps'
+   * extrapolated, or zeros (a predictor stage's) when they are not both known. */
+  void mid_step_accelerations(int64_t curve, MutableSpan<vec2> r_accelerations) const;
   /* Pass 1 of an articulated step, root to tip: the shape (with `shape`: each segment's frame,
    * the tip's contact and the rod's inertia; else as the bodies hold it), the rates at the
    * middle of the step (q̇ + h q̈ / 2 with q̈ = `mid_accelerations`), the velocity products,
