@@ -28,6 +28,8 @@ bench: build
 	  --python scripts/bench_blender_hair.py -- out/bench/blender_hair.json
 	blender -b --factory-startup --python-exit-code 1 \
 	  --python scripts/bench_playback.py -- out/bench/playback.json
+	blender -b --factory-startup --python-exit-code 1 \
+	  --python scripts/bench_lcp_groom.py -- out/bench/lcp_groom.json
 
 package: build
 	python3 scripts/package.py out/dist

@@ -1,37 +1,18 @@
 """Sintel's real groom on Sintel's bust (../shared/data/sintel): import both, turn the head,
 bake with collision, and no strand passes through the bust."""
+
 import bpy
 import pytest
+import sintel_assets
 
-from conftest import ROOT
 from hairdyn import simulation
-
-SINTEL = ROOT.parent / "shared" / "data" / "sintel"
-SCALE = 0.015  # the assets are about 40 units tall: a 0.6 m bust
 
 
 def sintel_scene():
-    if not SINTEL.is_dir():
-        pytest.skip(f"needs the Sintel assets in {SINTEL}")
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.hairdyn.import_tfx(filepath=str(SINTEL / "sintel_hair.tfx"), scale=SCALE)
-    hair = bpy.context.view_layer.objects.active
-    if hasattr(bpy.ops.wm, "obj_import"):
-        bpy.ops.wm.obj_import(filepath=str(SINTEL / "sintel_bust.obj"), global_scale=SCALE)
-    else:
-        bpy.ops.import_scene.obj(filepath=str(SINTEL / "sintel_bust.obj"), global_scale=SCALE)
-    bust = next(o for o in bpy.context.scene.objects if o.type == 'MESH')
-    # A head turn of about 35 degrees over half a second, about the bust's vertical axis.
-    turn = bust.rotation_euler.copy()
-    bust.keyframe_insert("rotation_euler", frame=1)
-    turn.z += 0.6
-    bust.rotation_euler = turn
-    bust.keyframe_insert("rotation_euler", frame=12)
-    settings = hair.hairdyn
-    settings.method = 'STRANDS'
-    settings.head = bust
-    settings.strands.children_per_guide = 0
-    return hair, bust
+    try:
+        return sintel_assets.load()
+    except FileNotFoundError as error:
+        pytest.skip(str(error))
 
 
 @pytest.mark.parametrize("model", ['KURIHARA1993', 'ARTICULATED'])
@@ -54,7 +35,9 @@ def test_sintel_head_turn_stays_out_of_the_bust(use_collision, model, tmp_path):
     assert report["nan_frames"] == 0 and report["stretch_max"] < 1e-4
     assert report["colliders"] == [bust.name]
     # Deeper than 1% of the bust's size (bounding-box diagonal) counts as passing through.
-    assert report["penetration_tolerance"] == pytest.approx(0.01 * runner.simulation.colliders.set.size_wo)
+    assert report["penetration_tolerance"] == pytest.approx(
+        0.01 * runner.simulation.colliders.set.size_wo
+    )
     deeper = report["penetration_share"] * report["points"] * report["frames"]
     if use_collision:
         assert deeper == 0, report
