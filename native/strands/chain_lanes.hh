@@ -85,27 +85,27 @@ template<class R> HAIRDYN_CHAIN_INLINE void put(M3<R> &m, const int lane, const 
 
 template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator+(const V2<R> &a, const V2<R> &b)
 {
-  return {a.x + b.x, a.y + b.y};
+  return { a.x + b.x, a.y + b.y };
 }
 template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator-(const V2<R> &a, const V2<R> &b)
 {
-  return {a.x - b.x, a.y - b.y};
+  return { a.x - b.x, a.y - b.y };
 }
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator+(const V3<R> &a, const V3<R> &b)
 {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
+  return { a.x + b.x, a.y + b.y, a.z + b.z };
 }
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator-(const V3<R> &a, const V3<R> &b)
 {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
+  return { a.x - b.x, a.y - b.y, a.z - b.z };
 }
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator-(const V3<R> &v)
 {
-  return {-v.x, -v.y, -v.z};
+  return { -v.x, -v.y, -v.z };
 }
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const R &s, const V3<R> &v)
 {
-  return {s * v.x, s * v.y, s * v.z};
+  return { s * v.x, s * v.y, s * v.z };
 }
 template<class R> HAIRDYN_CHAIN_INLINE R dot(const V3<R> &a, const V3<R> &b)
 {
@@ -113,65 +113,65 @@ template<class R> HAIRDYN_CHAIN_INLINE R dot(const V3<R> &a, const V3<R> &b)
 }
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> cross(const V3<R> &x, const V3<R> &y)
 {
-  return {x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y};
+  return { x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y };
 }
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator+(const M3<R> &a, const M3<R> &b)
 {
-  return {{a.c[0] + b.c[0], a.c[1] + b.c[1], a.c[2] + b.c[2]}};
+  return { { a.c[0] + b.c[0], a.c[1] + b.c[1], a.c[2] + b.c[2] } };
 }
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &a, const M3<R> &b)
 {
-  return {{a.c[0] - b.c[0], a.c[1] - b.c[1], a.c[2] - b.c[2]}};
+  return { { a.c[0] - b.c[0], a.c[1] - b.c[1], a.c[2] - b.c[2] } };
 }
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &m)
 {
-  return {{-m.c[0], -m.c[1], -m.c[2]}};
+  return { { -m.c[0], -m.c[1], -m.c[2] } };
 }
 /* m v */
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const M3<R> &m, const V3<R> &v)
 {
-  return {m.c[0].x * v.x + m.c[1].x * v.y + m.c[2].x * v.z,
-          m.c[0].y * v.x + m.c[1].y * v.y + m.c[2].y * v.z,
-          m.c[0].z * v.x + m.c[1].z * v.y + m.c[2].z * v.z};
+  return { m.c[0].x * v.x + m.c[1].x * v.y + m.c[2].x * v.z,
+           m.c[0].y * v.x + m.c[1].y * v.y + m.c[2].y * v.z,
+           m.c[0].z * v.x + m.c[1].z * v.y + m.c[2].z * v.z };
 }
 /* mᵀ v */
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> transpose_times(const M3<R> &m, const V3<R> &v)
 {
-  return {dot(m.c[0], v), dot(m.c[1], v), dot(m.c[2], v)};
+  return { dot(m.c[0], v), dot(m.c[1], v), dot(m.c[2], v) };
 }
 /* mᵀ */
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> transpose(const M3<R> &m)
 {
-  return {{{m.c[0].x, m.c[1].x, m.c[2].x},
-           {m.c[0].y, m.c[1].y, m.c[2].y},
-           {m.c[0].z, m.c[1].z, m.c[2].z}}};
+  return { { { m.c[0].x, m.c[1].x, m.c[2].x },
+             { m.c[0].y, m.c[1].y, m.c[2].y },
+             { m.c[0].z, m.c[1].z, m.c[2].z } } };
 }
 /* x yᵀ */
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> outer(const V3<R> &x, const V3<R> &y)
 {
-  return {{y.x * x, y.y * x, y.z * x}};
+  return { { y.x * x, y.y * x, y.z * x } };
 }
 /* [v]× m and m [v]×, column by column (the products with cross_matrix(v) less its
  * multiplications by zero). */
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> cross_times(const V3<R> &v, const M3<R> &m)
 {
-  return {{cross(v, m.c[0]), cross(v, m.c[1]), cross(v, m.c[2])}};
+  return { { cross(v, m.c[0]), cross(v, m.c[1]), cross(v, m.c[2]) } };
 }
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> times_cross(const M3<R> &m, const V3<R> &v)
 {
-  return {{v.z * m.c[1] - v.y * m.c[2], v.x * m.c[2] - v.z * m.c[0],
-           v.y * m.c[0] - v.x * m.c[1]}};
+  return { { v.z * m.c[1] - v.y * m.c[2], v.x * m.c[2] - v.z * m.c[0],
+             v.y * m.c[0] - v.x * m.c[1] } };
 }
 /* m v */
 template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator*(const M2<R> &m, const V2<R> &v)
 {
-  return {m.c[0].x * v.x + m.c[1].x * v.y, m.c[0].y * v.x + m.c[1].y * v.y};
+  return { m.c[0].x * v.x + m.c[1].x * v.y, m.c[0].y * v.x + m.c[1].y * v.y };
 }
 template<class R> HAIRDYN_CHAIN_INLINE M2<R> inverse(const M2<R> &m)
 {
   const R one_over_determinant = 1.0 / (m.c[0].x * m.c[1].y - m.c[1].x * m.c[0].y);
-  return {{{m.c[1].y * one_over_determinant, -m.c[0].y * one_over_determinant},
-           {-m.c[1].x * one_over_determinant, m.c[0].x * one_over_determinant}}};
+  return { { { m.c[1].y * one_over_determinant, -m.c[0].y * one_over_determinant },
+             { -m.c[1].x * one_over_determinant, m.c[0].x * one_over_determinant } } };
 }
 
 }  // namespace hairdyn::chain
