@@ -130,8 +130,9 @@ TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
    * precision recursions in one vector (chain_lanes.hh). Each strand must come out with the
    * bits it has when simulated alone, through everything a step does: contacts with the
    * sphere and the projection's impulses, the predictor steps after them, steps cut short
-   * while the head shakes, and a last group that is not full. Here 7 strands of 16 segments
-   * and 4 of 8, interleaved, draped over the sphere while the head turns back and forth. */
+   * while the head shakes, and a last group that is not full; with the AVX2 code and with the
+   * baseline code. Here 7 strands of 16 segments and 4 of 8, interleaved, draped over the
+   * sphere while the head turns back and forth. */
   const test::TestMesh sphere = test::uv_sphere(radius, 48, 24);
   const ColliderMesh mesh(sphere.vertices, sphere.triangles);
   CollisionParams collision;
@@ -158,35 +159,64 @@ TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
   }
   StrandParams params;
   params.model = StrandModel::Articulated;
-  const auto head = [](const int frame) {
-    return glm::rotate(mat4(1.0f), 1.2f * std::sin(float(frame) * 0.6f), vec3(0, 0, 1));
+  const int frames_num = 36;
+  /* Per frame, every strand's positions and velocities, one after the other. */
+  const auto run = [&](const std::vector<Groom> &grooms, int64_t &r_contacts,
+                       int64_t &r_projections) {
+    std::vector<std::unique_ptr<StrandSolver>> solvers;
+    for (const Groom &groom : grooms) {
+      solvers.push_back(std::make_unique<StrandSolver>(groom.offsets, groom.positions,
+                                                       mat4(1.0f), groom.normals, params));
+      solvers.back()->set_colliders(&colliders, collision);
+    }
+    std::vector<std::vector<vec3>> frames;
+    r_contacts = r_projections = 0;
+    for (int frame = 1; frame <= frames_num; frame++) {
+      const mat4 head = glm::rotate(mat4(1.0f), 1.2f * std::sin(float(frame) * 0.6f),
+                                    vec3(0, 0, 1));
+      frames.emplace_back();
+      for (const std::unique_ptr<StrandSolver> &solver : solvers) {
+        solver->step(1.0f / 24.0f, head);
+        EXPECT_EQ(solver->diverged_num(), 0);
+        r_contacts += solver->contacts_num();
+        r_projections += solver->projections_num();
+        frames.back().insert(frames.back().end(), solver->positions().begin(),
+                             solver->positions().end());
+        frames.back().insert(frames.back().end(), solver->velocities().begin(),
+                             solver->velocities().end());
+      }
+    }
+    return frames;
   };
-  StrandSolver solver(together.offsets, together.positions, mat4(1.0f), together.normals,
-                      params);
-  solver.set_colliders(&colliders, collision);
-  std::vector<std::unique_ptr<StrandSolver>> solvers;
-  for (const Groom &groom : alone) {
-    solvers.push_back(std::make_unique<StrandSolver>(groom.offsets, groom.positions,
-                                                     mat4(1.0f), groom.normals, params));
-    solvers.back()->set_colliders(&colliders, collision);
-  }
   int64_t contacts = 0, projections = 0;
-  for (int frame = 1; frame <= 36; frame++) {
-    solver.step(1.0f / 24.0f, head(frame));
-    contacts += solver.contacts_num();
-    projections += solver.projections_num();
-    ASSERT_EQ(solver.diverged_num(), 0);
-    int64_t point = 0;
-    for (size_t s = 0; s < solvers.size(); s++) {
-      solvers[s]->step(1.0f / 24.0f, head(frame));
-      for (const vec3 &p : solvers[s]->positions()) {
-        ASSERT_EQ(p, solver.positions()[point]) << "frame " << frame << ", strand " << s;
-        ASSERT_EQ(solvers[s]->velocities()[point - together.offsets[s]],
-                  solver.velocities()[point]);
-        point++;
+  const std::vector<std::vector<vec3>> expected = run(alone, contacts, projections);
+  EXPECT_GT(contacts, 0);
+  EXPECT_GT(projections, 0);
+  const bool avx2_was_used = articulated_avx2_used();
+  for (const bool avx2 : {true, false}) {
+    set_articulated_avx2(avx2);
+    const std::vector<std::vector<vec3>> frames = run({together}, contacts, projections);
+    for (int frame = 0; frame < frames_num; frame++) {
+      /* `together` lists positions then velocities of all; `alone` strand by strand. */
+      std::vector<vec3> reordered;
+      const size_t points = together.positions.size();
+      for (int pass = 0; pass < 2; pass++) {
+        size_t offset = 0;
+        for (const Groom &groom : alone) {
+          const size_t n = groom.positions.size();
+          reordered.insert(reordered.end(),
+                           expected[size_t(frame)].begin() + int64_t(2 * offset + pass * n),
+                           expected[size_t(frame)].begin() + int64_t(2 * offset + pass * n + n));
+          offset += n;
+        }
+      }
+      ASSERT_EQ(reordered.size(), 2 * points);
+      for (size_t i = 0; i < reordered.size(); i++) {
+        ASSERT_EQ(frames[size_t(frame)][i], reordered[i])
+            << "frame " << frame + 1 << ", " << (i < points ? "position" : "velocity") << " of point "
+            << i % points << (avx2 ? ", AVX2" : ", baseline");
       }
     }
   }
-  EXPECT_GT(contacts, 0);
-  EXPECT_GT(projections, 0);
+  set_articulated_avx2(avx2_was_used);
 }

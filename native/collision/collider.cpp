@@ -11,6 +11,7 @@
 #include <immintrin.h>
 #endif
 
+#include "core/cpu.hh"
 #include "core/parallel.hh"
 
 namespace hairdyn {
@@ -299,18 +300,17 @@ PenetrationStats ColliderSet::penetration_stats(const Span<vec3> points_wo,
 
 namespace {
 
-/* Whether the CPU has AVX2, asked once. */
-bool cpu_has_avx2()
+/* Whether the AVX2 code runs: where the CPU has it (HAIRDYN_BLEND_AVX2 where it is built). */
+bool avx2_built_and_available()
 {
 #if defined(HAIRDYN_BLEND_AVX2)
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");
+  return cpu_has_avx2();
 #else
   return false;
 #endif
 }
 
-std::atomic<bool> use_avx2{ cpu_has_avx2() };
+std::atomic<bool> use_avx2{ avx2_built_and_available() };
 
 using OutputSpans = std::tuple<MutableSpan<uint8_t>, MutableSpan<float>, MutableSpan<vec3>,
                                MutableSpan<vec3>>;
@@ -460,12 +460,12 @@ void find_contacts_range_baseline(const ColliderSet &colliders, const Span<vec3>
 
 bool collision_avx2_available()
 {
-  return cpu_has_avx2();
+  return avx2_built_and_available();
 }
 
 void set_collision_avx2(const bool enabled)
 {
-  use_avx2 = enabled && cpu_has_avx2();
+  use_avx2 = enabled && avx2_built_and_available();
 }
 
 bool collision_avx2_used()

@@ -54,10 +54,12 @@
  * moves on its own) changes the generalised momentum of everything distal to it, and fed a
  * whipping chain energy until it ran away. */
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <vector>
 
+#include "core/cpu.hh"
 #include "groom/groom.hh"
 #include "strands/chain_lanes.hh"
 #include "strands/deflection.hh"
@@ -242,16 +244,20 @@ __attribute__((target("avx2"))) void recursion_lanes_avx2(Link<Lanes> *links, co
   root_to_tip(links, n);
 }
 #endif
-using RecursionLanes = void (*)(Link<Lanes> *, size_t);
-const RecursionLanes recursion_lanes = [] {
 #if defined(__x86_64__)
-  __builtin_cpu_init(); /* this runs before constructors: GCC asks for it there */
-  if (__builtin_cpu_supports("avx2")) {
-    return &recursion_lanes_avx2;
+std::atomic<bool> use_avx2{cpu_has_avx2()};
+#endif
+
+void recursion_lanes(Link<Lanes> *links, const size_t n)
+{
+#if defined(__x86_64__)
+  if (use_avx2.load(std::memory_order_relaxed)) {
+    recursion_lanes_avx2(links, n);
+    return;
   }
 #endif
-  return &recursion_lanes_baseline;
-}();
+  recursion_lanes_baseline(links, n);
+}
 
 thread_local std::vector<StrandSolver::ArticulatedBody> bodies;
 thread_local std::vector<Link<double>> links;
@@ -738,6 +744,24 @@ void StrandSolver::articulated_step_lanes(const Span<int64_t> curves, const Subs
                       MutableSpan<vec2>(angular_velocities_).slice(int64_t(first), int64_t(n)));
     }
   }
+}
+
+bool articulated_avx2_used()
+{
+#if defined(__x86_64__)
+  return use_avx2;
+#else
+  return false;
+#endif
+}
+
+void set_articulated_avx2(const bool enabled)
+{
+#if defined(__x86_64__)
+  use_avx2 = enabled && cpu_has_avx2();
+#else
+  (void)enabled;
+#endif
 }
 
 }  // namespace hairdyn

@@ -98,6 +98,12 @@ struct Substep {
   ForceField forces;
 };
 
+/* Whether the articulated model's vector recursion runs its AVX2 code: by default where the
+ * CPU has it. Turning it off runs the baseline code, for the test that both give the same
+ * bits; not to be changed while a step runs. */
+bool articulated_avx2_used();
+void set_articulated_avx2(bool enabled);
+
 class StrandSolver {
  public:
   /* `head_to_world_rest` is the head's object-to-world matrix when the groom had
