@@ -128,7 +128,9 @@ TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
 {
   /* The articulated model steps strands of one point count four at a time, their double-
    * precision recursions in one vector (chain_lanes.hh). Each strand must come out with the
-   * bits it has when simulated alone, through everything a step does: contacts with the
+   * bits it has when simulated alone (in a group of one, the other lanes repeating it; the
+   * same bits as the scalar step before the lanes: BM_StrandStep's result_hash), whatever its
+   * lane and its neighbours, through everything a step does: contacts with the
    * sphere and the projection's impulses, the predictor steps after them, steps cut short
    * while the head shakes, and a last group that is not full; with the AVX2 code and with the
    * baseline code. Here 7 strands of 16 segments and 4 of 8, interleaved, draped over the

@@ -52,7 +52,14 @@
  * inertia (stop_at_contact). That never
  * adds energy; stopping the one hinge instead (Kurihara 1993's hinges, where each segment
  * moves on its own) changes the generalised momentum of everything distal to it, and fed a
- * whipping chain energy until it ran away. */
+ * whipping chain energy until it ran away.
+ *
+ * Strands of one point count step four at a time (StrandSolver::group_strands): pass 1 (the
+ * shape, contacts and forces, in single precision) and the commit with its projection run
+ * strand by strand, and passes 2 and 3 for the four in one vector of doubles
+ * (strands/chain_lanes.hh), every operation as glm evaluates it, so a strand keeps the bits
+ * it has alone (test LanesGiveEachStrandItsOwnBits). Each strand predicts and cuts its steps
+ * on its own; a lane without a strand in a stage repeats another's, its result dropped. */
 #include <algorithm>
 #include <atomic>
 #include <cassert>
@@ -259,14 +266,15 @@ void recursion_lanes(Link<Lanes> *links, const size_t n)
   recursion_lanes_baseline(links, n);
 }
 
-thread_local std::vector<StrandSolver::ArticulatedBody> bodies;
-thread_local std::vector<Link<double>> links;
+/* A step's scratch, per lane: pass 1's bodies and the mid-step rates' q̈; the recursion's
+ * links; a strand's q̈ and its projected segments (body, outward normal); the nodes where a
+ * cut substep began. */
 thread_local std::vector<StrandSolver::ArticulatedBody> lane_bodies[lane_width];
+thread_local std::vector<vec2> lane_mid_accelerations[lane_width];
 thread_local std::vector<Link<Lanes>> lane_links;
-thread_local std::vector<vec2> mid_accelerations; /* per body: the mid-step rates' q̈ */
-thread_local std::vector<vec2> accelerations;     /* per body: the step's q̈ */
-thread_local std::vector<std::pair<size_t, vec3>> stops; /* body, outward normal */
-thread_local std::vector<vec3> substep_start; /* a strand's nodes where a cut substep began */
+thread_local std::vector<vec2> accelerations;
+thread_local std::vector<std::pair<size_t, vec3>> stops;
+thread_local std::vector<vec3> substep_start[lane_width];
 
 /* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
  * rod's is nearly 0, but a segment never spins by itself: a hinge turns it about its own
@@ -364,57 +372,98 @@ void stop_at_contact(const Link<R> *chain, const StrandSolver::ArticulatedBody *
 
 }  // namespace
 
-bool StrandSolver::advance_articulated(const int64_t curve, const Substep &substep,
-                                       const mat3 &root_frame, const vec3 &wind_wo,
-                                       Counts &counts)
+void StrandSolver::advance_articulated(const Span<int64_t> curves, const Substep &substep,
+                                       const Span<mat3> root_frames, const Span<vec3> winds,
+                                       Counts &counts, const MutableSpan<uint8_t> r_finite)
 {
   /* The velocity products are explicit: a segment that turns by more than about a radian in
    * one step (a pass's push of a few m/s on a 1 cm segment does) feeds its centripetal and
    * gyroscopic terms from a direction it has long left, and the chain runs away. Such a
    * strand takes shorter steps, each short enough that no turn exceeds max_turn_per_step,
    * down to substep.h / max_turn_steps; the head's pose and forces stay the substep's (the
-   * root is already placed). A strand that turns slowly takes the substep in one step. */
-  const IndexRange points = curve_points(curve_offsets_, curve);
+   * root is already placed). A strand that turns slowly takes the substep in one step. Each
+   * strand cuts its own steps; the strands still stepping step together. */
+  assert(curves.size() <= chain_lanes);
+  const int64_t lanes_num = curves.size();
   const float shortest = substep.h / float(max_turn_steps);
-  Substep step = substep;
-  float remaining = substep.h;
-  bool split_any = false;
-  while (remaining > 0.0f) {
-    /* The last step takes what remains (rounding leaves no sliver of a step). */
-    const float h = remaining <= 1.001f * step.h ? remaining : step.h;
-    if (h != step.h) {
-      step.h = h;
-      step.reaction.dt = h; /* the substep's collision constants, for this step */
-    }
-    int split = 1;
-    if (!articulated_step(curve, step, root_frame, wind_wo, counts,
-                          h > shortest * 1.5f ? &split : nullptr))
-    {
-      return false;
-    }
-    if (split > 1) {
-      if (!split_any) {
-        /* The nodes where the substep started: the velocity it hands on is its mean,
-         * (x − x_start) / h, as for a substep taken in one step (the passes read x − h v as
-         * where a node was). */
-        split_any = true;
-        substep_start.assign(positions_wo_.begin() + points.start,
-                             positions_wo_.begin() + points.one_after_last());
+  Substep steps[chain_lanes];
+  float remaining[chain_lanes];
+  bool split_any[chain_lanes];
+  int64_t active[chain_lanes]; /* the lanes still stepping */
+  for (int64_t k = 0; k < lanes_num; k++) {
+    steps[k] = substep;
+    remaining[k] = substep.h;
+    split_any[k] = false;
+    r_finite[k] = 1;
+    active[k] = k;
+  }
+  int64_t active_num = lanes_num;
+  while (active_num > 0) {
+    int64_t step_curves[chain_lanes];
+    Substep step_of[chain_lanes];
+    uint8_t may_split[chain_lanes];
+    mat3 frames[chain_lanes];
+    vec3 step_winds[chain_lanes];
+    float h[chain_lanes];
+    for (int64_t j = 0; j < active_num; j++) {
+      const int64_t k = active[j];
+      /* The last step takes what remains (rounding leaves no sliver of a step). */
+      h[j] = remaining[k] <= 1.001f * steps[k].h ? remaining[k] : steps[k].h;
+      if (h[j] != steps[k].h) {
+        steps[k].h = h[j];
+        steps[k].reaction.dt = h[j]; /* the substep's collision constants, for this step */
       }
-      step.h = std::max(h / float(split), shortest);
-      step.reaction.dt = step.h;
+      step_curves[j] = curves[k];
+      step_of[j] = steps[k];
+      may_split[j] = h[j] > shortest * 1.5f;
+      frames[j] = root_frames[k];
+      step_winds[j] = winds[k];
+    }
+    int outcomes[chain_lanes];
+    articulated_step(Span<int64_t>(step_curves, active_num), Span<Substep>(step_of, active_num),
+                     Span<uint8_t>(may_split, active_num), Span<mat3>(frames, active_num),
+                     Span<vec3>(step_winds, active_num), counts,
+                     MutableSpan<int>(outcomes, active_num));
+    int64_t kept = 0;
+    for (int64_t j = 0; j < active_num; j++) {
+      const int64_t k = active[j];
+      if (outcomes[j] < 0) {
+        r_finite[k] = 0;
+        continue;
+      }
+      if (outcomes[j] > 1) {
+        if (!split_any[k]) {
+          /* The nodes where the substep started: the velocity it hands on is its mean,
+           * (x − x_start) / h, as for a substep taken in one step (the passes read x − h v
+           * as where a node was). */
+          split_any[k] = true;
+          const IndexRange points = curve_points(curve_offsets_, curves[k]);
+          substep_start[k].assign(positions_wo_.begin() + points.start,
+                                  positions_wo_.begin() + points.one_after_last());
+        }
+        steps[k].h = std::max(h[j] / float(outcomes[j]), shortest);
+        steps[k].reaction.dt = steps[k].h;
+        active[kept++] = k;
+        continue;
+      }
+      remaining[k] = h[j] == remaining[k] ? 0.0f : remaining[k] - h[j];
+      if (remaining[k] > 0.0f) {
+        active[kept++] = k;
+      }
+    }
+    active_num = kept;
+  }
+  const float inv_h = 1.0f / substep.h;
+  for (int64_t k = 0; k < lanes_num; k++) {
+    if (!split_any[k] || !r_finite[k]) {
       continue;
     }
-    remaining = h == remaining ? 0.0f : remaining - h;
-  }
-  if (split_any) {
-    const float inv_h = 1.0f / substep.h;
+    const IndexRange points = curve_points(curve_offsets_, curves[k]);
     for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
       velocities_wo_[size_t(i)] =
-          (positions_wo_[size_t(i)] - substep_start[size_t(i - points.start)]) * inv_h;
+          (positions_wo_[size_t(i)] - substep_start[k][size_t(i - points.start)]) * inv_h;
     }
   }
-  return true;
 }
 
 void StrandSolver::mid_step_accelerations(const int64_t curve,
@@ -600,65 +649,15 @@ bool StrandSolver::articulated_commit(const int64_t curve, const Substep &subste
   return true;
 }
 
-bool StrandSolver::articulated_step(const int64_t curve, const Substep &substep,
-                                    const mat3 &root_frame, const vec3 &wind_wo, Counts &counts,
-                                    int *r_steps)
-{
-  const IndexRange points = curve_points(curve_offsets_, curve);
-  const float h = substep.h;
-  const size_t first = size_t(points.start) + 1;
-  const size_t n = size_t(points.size) - 1;
-  bodies.resize(n);
-  links.resize(n);
-  accelerations.resize(n);
-  const bool predict = accelerations_known_[size_t(curve)] < 2;
-  mid_accelerations.resize(n);
-  mid_step_accelerations(curve, mid_accelerations);
-  /* With a predictor, stage 0 finds q̈₀ and stage 1 takes the step; without, stage 1 alone.
-   * The shape and the inertias are found by the first stage run, which the second shares. */
-  for (int stage = predict ? 0 : 1; stage < 2; stage++) {
-    const bool predictor = stage == 0;
-    const bool shape = predictor || !predict;
-    Counts stage_counts; /* the contacts, counted if the stage takes the step */
-    const float fastest_turn = articulated_forward(curve, substep, root_frame, wind_wo,
-                                                   mid_accelerations, shape, bodies.data(),
-                                                   stage_counts);
-    if (shape && r_steps != nullptr && h * fastest_turn > max_turn_per_step) {
-      *r_steps = std::min(int(std::ceil(h * fastest_turn / max_turn_per_step)), max_turn_steps);
-      return true;
-    }
-    if (!predictor) {
-      counts.contacts += stage_counts.contacts;
-    }
-    for (size_t i = 0; i < n; i++) {
-      load(links[i], 0, bodies[i], shape);
-    }
-    tip_to_root(links.data(), n, shape);
-    root_to_tip(links.data(), n);
-    for (size_t i = 0; i < n; i++) {
-      (predictor ? mid_accelerations : accelerations)[i] = vec2(get(links[i].acceleration, 0));
-    }
-  }
-  if (!articulated_commit(curve, substep, root_frame, accelerations)) {
-    return false;
-  }
-  counts.projections += int64_t(stops.size());
-  for (const auto &[body, normal] : stops) {
-    stop_at_contact(links.data(), bodies.data(), 0, n, body, real(normal),
-                    MutableSpan<vec2>(angular_velocities_).slice(int64_t(first), int64_t(n)));
-  }
-  return true;
-}
-
-void StrandSolver::articulated_step_lanes(const Span<int64_t> curves, const Substep &substep,
-                                          const Span<mat3> root_frames, const Span<vec3> winds,
-                                          Counts &counts, const MutableSpan<LaneOutcome> r_outcomes)
+void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Substep> steps,
+                                    const Span<uint8_t> may_split, const Span<mat3> root_frames,
+                                    const Span<vec3> winds, Counts &counts,
+                                    const MutableSpan<int> r_outcomes)
 {
   static_assert(lane_width == chain_lanes);
-  assert(curves.size() <= lane_width);
+  assert(curves.size() >= 1 && curves.size() <= lane_width);
   const int lanes_num = int(curves.size());
   const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
-  thread_local std::vector<vec2> lane_mid_accelerations[lane_width];
   lane_links.resize(n);
   accelerations.resize(n);
   bool predict[lane_width];
@@ -668,13 +667,18 @@ void StrandSolver::articulated_step_lanes(const Span<int64_t> curves, const Subs
     predicting_lane = predict[lane] && predicting_lane < 0 ? lane : predicting_lane;
     lane_bodies[lane].resize(n);
     lane_mid_accelerations[lane].resize(n);
-    r_outcomes[lane] = LaneOutcome::Stepped;
+    r_outcomes[lane] = 1;
   }
-  /* The stages of articulated_step, lane by lane: pass 1 for each strand, passes 2 and 3 for
-   * all in one vector. A lane whose strand has no part in a stage repeats another's (its
-   * result is dropped). Stage 0, for the strands whose trend is not known: the predictor's q̈
-   * at the step's start rates. (The second stage's recursion finds U, D and I^a again from
-   * the same shape, where articulated_step keeps the first's: the same values.) */
+  /* The number of steps that keep a strand's turns within max_turn_per_step, if it may cut
+   * its step and must. */
+  const auto steps_needed = [&](const int lane, const float fastest_turn) {
+    const float turn = steps[lane].h * fastest_turn;
+    return may_split[lane] && turn > max_turn_per_step ?
+               std::min(int(std::ceil(turn / max_turn_per_step)), max_turn_steps) :
+               1;
+  };
+  /* Pass 1 for each strand, passes 2 and 3 for all in one vector; a lane whose strand has no
+   * part in a stage repeats another's (its result is dropped). */
   const auto recursion = [&](const auto &source_lane) {
     for (int lane = 0; lane < lane_width; lane++) {
       const std::vector<ArticulatedBody> &source = lane_bodies[source_lane(lane)];
@@ -684,17 +688,19 @@ void StrandSolver::articulated_step_lanes(const Span<int64_t> curves, const Subs
     }
     recursion_lanes(lane_links.data(), n);
   };
+  /* Stage 0, for the strands whose trend is not known: the predictor's q̈ at the step's start
+   * rates; stage 1 takes the step from the rates at its middle (see the top). The shape and
+   * the contacts are found by a strand's first stage and kept by its second (whose recursion
+   * finds U, D and I^a again from them: the same values). */
   if (predicting_lane >= 0) {
     for (int lane = 0; lane < lanes_num; lane++) {
       if (predict[lane]) {
         mid_step_accelerations(curves[lane], lane_mid_accelerations[lane]);
         Counts predictor_counts; /* only the step's contacts count */
-        const float fastest_turn = articulated_forward(
-            curves[lane], substep, root_frames[lane], winds[lane], lane_mid_accelerations[lane],
-            true, lane_bodies[lane].data(), predictor_counts);
-        if (substep.h * fastest_turn > max_turn_per_step) {
-          r_outcomes[lane] = LaneOutcome::Left;
-        }
+        r_outcomes[lane] = steps_needed(
+            lane, articulated_forward(curves[lane], steps[lane], root_frames[lane], winds[lane],
+                                      lane_mid_accelerations[lane], true,
+                                      lane_bodies[lane].data(), predictor_counts));
       }
     }
     recursion([&](const int lane) {
@@ -706,27 +712,25 @@ void StrandSolver::articulated_step_lanes(const Span<int64_t> curves, const Subs
       }
     }
   }
-  /* Stage 1: the step. */
   Counts lane_counts[lane_width];
   for (int lane = 0; lane < lanes_num; lane++) {
-    if (r_outcomes[lane] == LaneOutcome::Left) {
-      continue;
+    if (r_outcomes[lane] > 1) {
+      continue; /* unchanged: the caller cuts its step */
     }
     if (!predict[lane]) {
       mid_step_accelerations(curves[lane], lane_mid_accelerations[lane]);
     }
-    /* A predicted strand keeps the shape (and the contacts) stage 0 found. */
     const float fastest_turn = articulated_forward(
-        curves[lane], substep, root_frames[lane], winds[lane], lane_mid_accelerations[lane],
+        curves[lane], steps[lane], root_frames[lane], winds[lane], lane_mid_accelerations[lane],
         !predict[lane], lane_bodies[lane].data(), lane_counts[lane]);
-    if (!predict[lane] && substep.h * fastest_turn > max_turn_per_step) {
-      r_outcomes[lane] = LaneOutcome::Left;
+    if (!predict[lane]) {
+      r_outcomes[lane] = steps_needed(lane, fastest_turn);
     }
   }
   recursion([&](const int lane) { return lane < lanes_num ? lane : 0; });
   for (int lane = 0; lane < lanes_num; lane++) {
-    if (r_outcomes[lane] == LaneOutcome::Left) {
-      continue; /* unchanged: advance_articulated cuts its substep */
+    if (r_outcomes[lane] > 1) {
+      continue;
     }
     const int64_t curve = curves[lane];
     const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
@@ -734,8 +738,8 @@ void StrandSolver::articulated_step_lanes(const Span<int64_t> curves, const Subs
     for (size_t i = 0; i < n; i++) {
       accelerations[i] = vec2(get(lane_links[i].acceleration, lane));
     }
-    if (!articulated_commit(curve, substep, root_frames[lane], accelerations)) {
-      r_outcomes[lane] = LaneOutcome::Diverged;
+    if (!articulated_commit(curve, steps[lane], root_frames[lane], accelerations)) {
+      r_outcomes[lane] = -1;
       continue;
     }
     counts.projections += int64_t(stops.size());

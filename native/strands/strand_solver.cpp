@@ -407,57 +407,35 @@ vec3 StrandSolver::place_root(const int64_t curve, const Substep &substep, mat3 
 
 bool StrandSolver::advance_strand(const int64_t curve, const Substep &substep, Counts &counts)
 {
-  mat3 frame;
-  const vec3 wind_wo = place_root(curve, substep, frame);
-  const IndexRange points = curve_points(curve_offsets_, curve);
-  const bool finite = params_.model == StrandModel::Kurihara1993 ?
-                          advance_kurihara(points, substep, frame,
-                                           velocities_wo_[size_t(points.start)], wind_wo,
-                                           counts) :
-                          advance_articulated(curve, substep, frame, wind_wo, counts);
-  return finite || diverged(curve, substep, counts);
-}
-
-bool StrandSolver::diverged(const int64_t curve, const Substep &substep, Counts &counts)
-{
-  counts.diverged++;
-  place_at_rest(curve, substep.pose);
-  return false;
+  uint8_t finite;
+  advance_strands(Span<int64_t>(&curve, 1), substep, counts, MutableSpan<uint8_t>(&finite, 1));
+  return finite;
 }
 
 void StrandSolver::advance_strands(const Span<int64_t> curves, const Substep &substep,
                                    Counts &counts, const MutableSpan<uint8_t> r_finite)
 {
-  if (params_.model != StrandModel::Articulated || curves.size() < 2) {
-    for (int64_t lane = 0; lane < curves.size(); lane++) {
-      r_finite[lane] = advance_strand(curves[lane], substep, counts);
-    }
-    return;
-  }
-  /* The strands step together, their recursions in one vector (articulated_step_lanes);
-   * one that turns too fast for one step, alone. */
   mat3 frames[chain_lanes];
   vec3 winds[chain_lanes];
-  for (int64_t lane = 0; lane < curves.size(); lane++) {
-    winds[lane] = place_root(curves[lane], substep, frames[lane]);
+  for (int64_t k = 0; k < curves.size(); k++) {
+    winds[k] = place_root(curves[k], substep, frames[k]);
   }
-  LaneOutcome outcomes[chain_lanes];
-  articulated_step_lanes(curves, substep, Span<mat3>(frames, curves.size()),
-                         Span<vec3>(winds, curves.size()), counts,
-                         MutableSpan<LaneOutcome>(outcomes, curves.size()));
-  for (int64_t lane = 0; lane < curves.size(); lane++) {
-    const int64_t curve = curves[lane];
-    switch (outcomes[lane]) {
-      case LaneOutcome::Stepped:
-        r_finite[lane] = 1;
-        break;
-      case LaneOutcome::Left:
-        r_finite[lane] = advance_articulated(curve, substep, frames[lane], winds[lane], counts) ||
-                         diverged(curve, substep, counts);
-        break;
-      case LaneOutcome::Diverged:
-        r_finite[lane] = diverged(curve, substep, counts);
-        break;
+  if (params_.model == StrandModel::Kurihara1993) {
+    for (int64_t k = 0; k < curves.size(); k++) {
+      const IndexRange points = curve_points(curve_offsets_, curves[k]);
+      r_finite[k] = advance_kurihara(points, substep, frames[k],
+                                     velocities_wo_[size_t(points.start)], winds[k], counts);
+    }
+  }
+  else {
+    advance_articulated(curves, substep, Span<mat3>(frames, curves.size()),
+                        Span<vec3>(winds, curves.size()), counts, r_finite);
+  }
+  for (int64_t k = 0; k < curves.size(); k++) {
+    if (!r_finite[k]) {
+      /* Diverged: counted, and the strand put back at rest. */
+      counts.diverged++;
+      place_at_rest(curves[k], substep.pose);
     }
   }
 }

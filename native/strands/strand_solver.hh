@@ -261,8 +261,6 @@ class StrandSolver {
   /* One substep of one strand: the root carried by the head, then the model's dynamics.
    * Returns false when the strand diverged (it is then put back at rest). */
   bool advance_strand(int64_t curve, const Substep &substep, Counts &counts);
-  /* The strand diverged: counted and put at rest. Returns false. */
-  bool diverged(int64_t curve, const Substep &substep, Counts &counts);
   /* advance_strand for each of `curves` (at most chain_lanes, one point count: a group of
    * group_strands); r_finite[k] as it returns for curves[k]. */
   void advance_strands(Span<int64_t> curves, const Substep &substep, Counts &counts,
@@ -274,27 +272,21 @@ class StrandSolver {
                         vec3 node_velocity, const vec3 &wind_wo, Counts &counts);
   /* False when a node of the strand is not finite or faster than runaway_speed. */
   bool strand_is_sane(int64_t curve) const;
-  /* The articulated chain (strand_dynamics_articulated.cpp): one substep, cut into shorter
-   * steps while a segment turns fast (see articulated_step). */
-  bool advance_articulated(int64_t curve, const Substep &substep, const mat3 &root_frame,
-                           const vec3 &wind_wo, Counts &counts);
-  /* One step of substep.h. With `r_steps` given, a strand that turns more than
-   * max_turn_per_step within it is left unchanged and *r_steps is set to the number of
-   * equal steps that keep every turn within the bound (at most max_turn_steps). */
-  bool articulated_step(int64_t curve, const Substep &substep, const mat3 &root_frame,
-                        const vec3 &wind_wo, Counts &counts, int *r_steps);
-  /* What articulated_step_lanes did with each strand. */
-  enum class LaneOutcome : uint8_t {
-    Stepped,
-    Left,     /* unchanged: it turns too fast for one step (advance_articulated cuts it) */
-    Diverged, /* it ran away (the caller puts it at rest) */
-  };
-  /* The step of substep.h of advance_articulated for up to chain::lane_width strands of one
-   * segment count, their double-precision recursions in one vector (the predictor stage's
-   * too): each strand's bits are those of advance_articulated. */
-  void articulated_step_lanes(Span<int64_t> curves, const Substep &substep,
-                              Span<mat3> root_frames, Span<vec3> winds, Counts &counts,
-                              MutableSpan<LaneOutcome> r_outcomes);
+  /* The articulated chain (strand_dynamics_articulated.cpp): one substep of up to
+   * chain_lanes strands of one point count, their roots placed (root_frames, winds), each
+   * cut into shorter steps while it turns fast (see articulated_step); the strands stepping
+   * together, their double-precision recursions in one vector. r_finite[k] = 0 where strand
+   * k ran away (the caller puts it at rest). */
+  void advance_articulated(Span<int64_t> curves, const Substep &substep, Span<mat3> root_frames,
+                           Span<vec3> winds, Counts &counts, MutableSpan<uint8_t> r_finite);
+  /* One step of steps[k].h for each of `curves` (one point count, up to chain_lanes).
+   * r_outcomes[k]: 1 when strand k took it; -1 when it ran away; n > 1 when it may cut its
+   * step (may_split[k]) and turns more than max_turn_per_step within it: then it is left
+   * unchanged, and n equal steps (at most max_turn_steps) keep every turn within the bound.
+   * Each strand's bits are those it has stepped alone. */
+  void articulated_step(Span<int64_t> curves, Span<Substep> steps, Span<uint8_t> may_split,
+                        Span<mat3> root_frames, Span<vec3> winds, Counts &counts,
+                        MutableSpan<int> r_outcomes);
   /* The q̈ that the mid-step rates of strand `curve`'s next step take: the last two steps'
    * extrapolated, or zeros (a predictor stage's) when they are not both known. */
   void mid_step_accelerations(int64_t curve, MutableSpan<vec2> r_accelerations) const;
