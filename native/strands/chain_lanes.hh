@@ -19,6 +19,8 @@ namespace hairdyn::chain {
 
 constexpr int lane_width = 4;
 typedef double Lanes __attribute__((vector_size(lane_width * sizeof(double))));
+/* The same lanes in single precision (what pass 1 computes, widened exactly to Lanes). */
+typedef float Floats __attribute__((vector_size(lane_width * sizeof(float))));
 
 #define HAIRDYN_CHAIN_INLINE [[gnu::always_inline]] inline
 
@@ -52,6 +54,34 @@ HAIRDYN_CHAIN_INLINE void put(double &x, int /*lane*/, const double value)
 HAIRDYN_CHAIN_INLINE void put(Lanes &x, const int lane, const double value)
 {
   x[lane] = value;
+}
+HAIRDYN_CHAIN_INLINE void put(Floats &x, const int lane, const float value)
+{
+  x[lane] = value;
+}
+HAIRDYN_CHAIN_INLINE void put(V2<Floats> &v, const int lane, const glm::vec2 &value)
+{
+  v.x[lane] = value.x;
+  v.y[lane] = value.y;
+}
+HAIRDYN_CHAIN_INLINE void put(V3<Floats> &v, const int lane, const glm::vec3 &value)
+{
+  v.x[lane] = value.x;
+  v.y[lane] = value.y;
+  v.z[lane] = value.z;
+}
+/* Single-precision lanes in double precision (exact). */
+HAIRDYN_CHAIN_INLINE Lanes widen(const Floats &x)
+{
+  return __builtin_convertvector(x, Lanes);
+}
+HAIRDYN_CHAIN_INLINE V2<Lanes> widen(const V2<Floats> &v)
+{
+  return {widen(v.x), widen(v.y)};
+}
+HAIRDYN_CHAIN_INLINE V3<Lanes> widen(const V3<Floats> &v)
+{
+  return {widen(v.x), widen(v.y), widen(v.z)};
 }
 template<class R> HAIRDYN_CHAIN_INLINE glm::dvec2 get(const V2<R> &v, const int lane)
 {
@@ -107,6 +137,10 @@ template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const R &s, const V3<R> &
 {
   return { s * v.x, s * v.y, s * v.z };
 }
+template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator*(const R &s, const V2<R> &v)
+{
+  return {s * v.x, s * v.y};
+}
 template<class R> HAIRDYN_CHAIN_INLINE R dot(const V3<R> &a, const V3<R> &b)
 {
   return a.x * b.x + a.y * b.y + a.z * b.z;
@@ -126,6 +160,10 @@ template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &a, const M3<
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &m)
 {
   return { { -m.c[0], -m.c[1], -m.c[2] } };
+}
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator*(const R &s, const M3<R> &m)
+{
+  return {{s * m.c[0], s * m.c[1], s * m.c[2]}};
 }
 /* m v */
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const M3<R> &m, const V3<R> &v)

@@ -92,19 +92,24 @@ using rmat3 = glm::dmat3;
  * contact, and the recursion's inputs in double precision). */
 struct StrandSolver::ArticulatedBody {
   vec3 t, e_theta, pole;     /* the segment's direction, frame[1] and its chart's x axis */
+  rvec3 reach;               /* d t, from the hinge point to the segment's tip */
   bool touches;              /* the segment's tip is inside a collider: at `contact` */
   Contact contact;
-  /* Of the shape (the first stage of a step): */
-  rvec3 s_theta, s_phi;      /* the hinge's axes: q̇ turns the body by θ̇ s_θ + φ̇ s_φ */
-  rvec3 arm;                 /* r, from the parent's hinge point to this one */
-  rvec3 reach;               /* d t, from this hinge point to the segment's tip */
-  rmat3 a, b, c;             /* the rod's inertia at P_i, blocks [a b; bᵀ c] */
-  double armature;           /* h γ + h² k: the implicit springs' share of D */
-  /* Of the rates: */
-  rvec3 bias_angular;        /* velocity-product accelerations across the hinge (c_i) */
-  rvec3 bias_linear;
-  rvec3 p_torque, p_force;   /* the rod's bias force at P_i */
-  rvec2 hinge_torque;        /* −k q − (γ + h k) q̇ */
+};
+
+/* What pass 1 hands the recursion for one body, in single precision, one lane per strand:
+ * the recursion widens it and builds the rod's inertia and bias forces from it. */
+struct StrandSolver::ArticulatedTerms {
+  chain::V3<chain::Floats> t, pole, e_theta; /* the segment's frame, as in ArticulatedBody */
+  chain::V3<chain::Floats> arm;              /* r, from the parent's hinge point to this one */
+  chain::V3<chain::Floats> parent_omega;     /* the parent's turn, relative to the head */
+  chain::V3<chain::Floats> relative_turn;    /* θ̇ e_θ − φ̇ x across the hinge */
+  chain::V3<chain::Floats> omega;            /* the segment's turn */
+  chain::V3<chain::Floats> half;             /* d t / 2, to the segment's centre */
+  chain::V3<chain::Floats> force;            /* F at the centre */
+  chain::Floats rate_product;                /* θ̇ φ̇ */
+  chain::Floats m, d, k;                     /* mass, length, hinge stiffness */
+  chain::V2<chain::Floats> angles, rates;    /* q, q̇ */
 };
 
 namespace {
@@ -117,6 +122,7 @@ using chain::M3;
 using chain::put;
 using chain::V2;
 using chain::V3;
+using chain::widen;
 
 /* A body in Featherstone's recursion, over lanes R (chain_lanes.hh). Aligned for the widest
  * vector loads: GCC gives a vector of Lanes only 16-byte alignment where AVX is off, and
@@ -136,26 +142,57 @@ template<class R> struct alignas(32) Link {
   V2<R> acceleration;        /* q̈, pass 3's result */
 };
 
-/* Lane `lane` of `link` from pass 1's body: everything, or (not `shape`) what the rates
- * change. */
-template<class R>
-void load(Link<R> &link, const int lane, const StrandSolver::ArticulatedBody &body,
-          const bool shape)
+/* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
+ * rod's is nearly 0, but a segment never spins by itself: a hinge turns it about its own
+ * axis only near the chart's pole (θ = ±π/2, where φ̇ just twists the segment), and there a
+ * near-zero inertia let φ̇ grow without bound for a finite motion: the chain ran away (a
+ * strand blown flat against the head bends its first segment there). With the transverse
+ * inertia about its axis too, turning through the pole costs what any other turn does, as
+ * for Kurihara 1993's hinges (eq. 1: the same I for θ and φ); away from the pole the twist
+ * is φ̇ sin θ, so bending near rest is unchanged to second order. */
+constexpr float axial_inertia_share = 1.0f;
+
+/* Each body's rod: its hinge axes, velocity products, inertia at P_i and bias force, and its
+ * hinge torque, from pass 1's terms (in double precision; `hd`: each lane's step length).
+ *
+ * The rod's inertia about P_i is m d² / 3 about every axis through P_i, its own axis included
+ * (see axial_inertia_share), with the gyroscopic torque ω × (I ω) of that inertia; the hinge
+ * spring and damper are linearly implicit (see the top of the file). */
+template<class R, class Terms>
+HAIRDYN_CHAIN_INLINE void fill_links(Link<R> *links, const Terms *terms, const size_t n,
+                                     const R &hd, const bool implicit, const double damping)
 {
-  if (shape) {
-    put(link.s_theta, lane, body.s_theta);
-    put(link.s_phi, lane, body.s_phi);
-    put(link.arm, lane, body.arm);
-    put(link.a, lane, body.a);
-    put(link.b, lane, body.b);
-    put(link.c, lane, body.c);
-    put(link.armature, lane, body.armature);
+  const R zero{};
+  const R one = zero + 1.0;
+  const R spinless = zero + (1.0 - double(axial_inertia_share));
+  const M3<R> identity{{{one, zero, zero}, {zero, one, zero}, {zero, zero, one}}};
+  for (size_t i = 0; i < n; i++) {
+    const Terms &x = terms[i];
+    Link<R> &link = links[i];
+    const V3<R> t = widen(x.t), pole = widen(x.pole), arm = widen(x.arm);
+    const V3<R> parent_omega = widen(x.parent_omega), omega = widen(x.omega);
+    const V3<R> half = widen(x.half), force = widen(x.force);
+    const R m = widen(x.m), d = widen(x.d), k = widen(x.k);
+    link.s_theta = widen(x.e_theta);
+    link.s_phi = -pole;
+    link.arm = arm;
+    link.bias_angular = cross(parent_omega, widen(x.relative_turn)) -
+                        widen(x.rate_product) * cross(pole, link.s_theta);
+    link.bias_linear = cross(parent_omega, cross(parent_omega, arm));
+    const R transverse = m * d * d / 3.0;
+    link.a = transverse * (identity - spinless * chain::outer(t, t));
+    link.b = {{{m * zero, m * half.z, m * -half.y},
+               {m * -half.z, m * zero, m * half.x},
+               {m * half.y, m * -half.x, m * zero}}};
+    link.c = {{{m, zero, zero}, {zero, m, zero}, {zero, zero, m}}};
+    const R gamma = damping * k; /* Kelvin–Voigt: γ = τ k */
+    link.armature = implicit ? hd * gamma + hd * hd * k : zero;
+    link.p_torque = -(spinless * transverse) * dot(t, omega) * cross(omega, t) -
+                    cross(half, force);
+    link.p_force = m * cross(omega, cross(omega, half)) - force;
+    link.hinge_torque = -k * widen(x.angles) - (implicit ? gamma + hd * k : gamma) *
+                                                   widen(x.rates);
   }
-  put(link.bias_angular, lane, body.bias_angular);
-  put(link.bias_linear, lane, body.bias_linear);
-  put(link.p_torque, lane, body.p_torque);
-  put(link.p_force, lane, body.p_force);
-  put(link.hinge_torque, lane, body.hinge_torque);
 }
 
 /* Pass 2, tip to root (Table 7.1, second loop): U = I^A S, D = Sᵀ U + armature,
@@ -237,33 +274,49 @@ template<class R> HAIRDYN_CHAIN_INLINE void root_to_tip(Link<R> *links, const si
   }
 }
 
-/* Passes 2 and 3 for lane_width strands at once, compiled for the widest vectors the
- * processor has (each lane's bits are the same on every path, chain_lanes.hh). */
-void recursion_lanes_baseline(Link<Lanes> *links, const size_t n)
+/* Passes 2 and 3 for lane_width strands at once, from pass 1's terms, compiled for the widest
+ * vectors the processor has (each lane's bits are the same on every path, chain_lanes.hh). */
+using Terms = StrandSolver::ArticulatedTerms;
+void recursion_lanes_baseline(Link<Lanes> *links, const Terms *terms, const size_t n,
+                              const Lanes &hd, const bool implicit, const double damping)
 {
+  fill_links(links, terms, n, hd, implicit, damping);
   tip_to_root(links, n, true);
   root_to_tip(links, n);
 }
 #if defined(__x86_64__)
-__attribute__((target("avx2"))) void recursion_lanes_avx2(Link<Lanes> *links, const size_t n)
+__attribute__((target("avx2"))) void recursion_lanes_avx2(Link<Lanes> *links,
+                                                           const Terms *terms, const size_t n,
+                                                           const Lanes &hd, const bool implicit,
+                                                           const double damping)
 {
+  fill_links(links, terms, n, hd, implicit, damping);
   tip_to_root(links, n, true);
   root_to_tip(links, n);
 }
-#endif
-#if defined(__x86_64__)
 std::atomic<bool> use_avx2{cpu_has_avx2()};
 #endif
 
-void recursion_lanes(Link<Lanes> *links, const size_t n)
+void recursion_lanes(Link<Lanes> *links, const Terms *terms, const size_t n, const Lanes &hd,
+                     const bool implicit, const double damping)
 {
 #if defined(__x86_64__)
   if (use_avx2.load(std::memory_order_relaxed)) {
-    recursion_lanes_avx2(links, n);
+    recursion_lanes_avx2(links, terms, n, hd, implicit, damping);
     return;
   }
 #endif
-  recursion_lanes_baseline(links, n);
+  recursion_lanes_baseline(links, terms, n, hd, implicit, damping);
+}
+
+/* Copies lane `from` of a body's terms to lane `to` (every member is one vector of Floats). */
+void copy_lane(Terms &terms, const int from, const int to)
+{
+  static_assert(sizeof(Terms) % sizeof(chain::Floats) == 0);
+  chain::Floats *lanes = reinterpret_cast<chain::Floats *>(&terms);
+  for (size_t j = 0; j < sizeof(Terms) / sizeof(chain::Floats); j++) {
+    lanes[j][to] = lanes[j][from];
+  }
 }
 
 /* A step's scratch, per lane: pass 1's bodies and the mid-step rates' q̈; the recursion's
@@ -272,19 +325,11 @@ void recursion_lanes(Link<Lanes> *links, const size_t n)
 thread_local std::vector<StrandSolver::ArticulatedBody> lane_bodies[lane_width];
 thread_local std::vector<vec2> lane_mid_accelerations[lane_width];
 thread_local std::vector<Link<Lanes>> lane_links;
+thread_local std::vector<Terms> lane_terms;
 thread_local std::vector<vec2> accelerations;
 thread_local std::vector<std::pair<size_t, vec3>> stops;
 thread_local std::vector<vec3> substep_start[lane_width];
 
-/* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
- * rod's is nearly 0, but a segment never spins by itself: a hinge turns it about its own
- * axis only near the chart's pole (θ = ±π/2, where φ̇ just twists the segment), and there a
- * near-zero inertia let φ̇ grow without bound for a finite motion: the chain ran away (a
- * strand blown flat against the head bends its first segment there). With the transverse
- * inertia about its axis too, turning through the pole costs what any other turn does, as
- * for Kurihara 1993's hinges (eq. 1: the same I for θ and φ); away from the pole the twist
- * is φ̇ sin θ, so bending near rest is unchanged to second order. */
-constexpr float axial_inertia_share = 1.0f;
 
 inline rvec3 real(const vec3 &v)
 {
@@ -485,16 +530,17 @@ float StrandSolver::articulated_forward(const int64_t curve, const Substep &subs
                                         const mat3 &root_frame, const vec3 &wind_wo,
                                         const Span<vec2> mid_rates_accelerations,
                                         const bool shape, ArticulatedBody *chain_bodies,
+                                        ArticulatedTerms *terms, const int lane,
                                         Counts &counts) const
 {
   /* Pass 1, root to tip (Table 7.1, first loop): geometry, relative velocities, the velocity
-   * products, each rod's inertia and its bias force with the external force F. */
+   * products and the external force F on each rod (its inertia and bias force follow from
+   * them in double precision: fill_links). */
   const IndexRange points = curve_points(curve_offsets_, curve);
   const float h = substep.h;
   const size_t first = size_t(points.start) + 1;
   const size_t end = size_t(points.one_after_last());
   const float density = line_density();
-  const bool implicit = params_.integrator == Integrator::Implicit;
   mat3 frame = root_frame;
   vec3 node = positions_wo_[size_t(points.start)];
   vec3 node_velocity(0.0f);   /* relative to the head */
@@ -504,6 +550,7 @@ float StrandSolver::articulated_forward(const int64_t curve, const Substep &subs
   const vec3 head_center = substep.pose.translation;
   for (size_t i = first; i < end; i++) {
     ArticulatedBody &body = chain_bodies[i - first];
+    ArticulatedTerms &x = terms[i - first];
     const float d = rest_lengths_[i];
     const float m = density * d;
     if (shape) {
@@ -512,17 +559,11 @@ float StrandSolver::articulated_forward(const int64_t curve, const Substep &subs
       body.t = frame[2];
       body.e_theta = frame[1];
       body.pole = chart[0];
-      body.s_theta = real(frame[1]);
-      body.s_phi = -real(chart[0]);
-      body.arm = real(arm);
       body.reach = real(d * body.t);
     }
     const vec3 t = body.t;
     const vec2 rate = angular_velocities_[i] + (0.5f * h) * mid_rates_accelerations[i - first];
     const vec3 relative_turn = rate.x * body.e_theta - rate.y * body.pole;
-    body.bias_angular = glm::cross(real(parent_omega), real(relative_turn)) -
-                        double(rate.x * rate.y) * glm::cross(real(body.pole), body.s_theta);
-    body.bias_linear = glm::cross(real(parent_omega), glm::cross(real(parent_omega), body.arm));
     node += arm;
     node_velocity += glm::cross(parent_omega, arm);
     const vec3 omega = parent_omega + relative_turn;
@@ -546,31 +587,21 @@ float StrandSolver::articulated_forward(const int64_t curve, const Substep &subs
     const vec3 force = segment_force(substep, i, center, center_velocity,
                                      body.touches ? &body.contact : nullptr, tip_velocity,
                                      wind_wo, counts);
-
-    /* The rod's inertia about P_i: m d² / 3 about every axis through P_i, its own axis
-     * included (see axial_inertia_share), and the gyroscopic torque ω × (I ω) of that
-     * inertia. The inertia depends on the shape alone, which the step's stage does not
-     * change: the first stage's articulated inertias serve the second. */
-    const double transverse = double(m) * d * d / 3.0;
-    const double spinless = 1.0 - double(axial_inertia_share);
-    const rvec3 t_real = real(t), omega_real = real(omega), half_real = real(half);
-    /* The hinge spring and damper, linearly implicit (see the top of the file). */
-    const double k = hinge_stiffness_[i];
-    const double gamma = double(params_.bending_damping) * k; /* Kelvin–Voigt: γ = τ k */
-    const double hd = h;
-    if (shape) {
-      body.a = transverse * (rmat3(1.0) - spinless * outer(t_real, t_real));
-      body.b = double(m) * cross_matrix(half_real);
-      body.c = rmat3(double(m));
-      body.armature = implicit ? hd * gamma + hd * hd * k : 0.0;
-    }
-    body.p_torque = -(spinless * transverse) * glm::dot(t_real, omega_real) *
-                        glm::cross(omega_real, t_real) -
-                    glm::cross(half_real, real(force));
-    body.p_force = double(m) * glm::cross(omega_real, glm::cross(omega_real, half_real)) -
-                   real(force);
-    body.hinge_torque = -k * rvec2(angles_[i]) -
-                        (implicit ? gamma + hd * k : gamma) * rvec2(angular_velocities_[i]);
+    put(x.t, lane, t);
+    put(x.pole, lane, body.pole);
+    put(x.e_theta, lane, body.e_theta);
+    put(x.arm, lane, arm);
+    put(x.parent_omega, lane, parent_omega);
+    put(x.relative_turn, lane, relative_turn);
+    put(x.omega, lane, omega);
+    put(x.half, lane, half);
+    put(x.force, lane, force);
+    put(x.rate_product, lane, rate.x * rate.y);
+    put(x.m, lane, m);
+    put(x.d, lane, d);
+    put(x.k, lane, hinge_stiffness_[i]);
+    put(x.angles, lane, angles_[i]);
+    put(x.rates, lane, angular_velocities_[i]);
 
     parent_omega = omega;
     arm = d * t;
@@ -659,6 +690,7 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
   const int lanes_num = int(curves.size());
   const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
   lane_links.resize(n);
+  lane_terms.resize(n);
   accelerations.resize(n);
   bool predict[lane_width];
   int predicting_lane = -1;
@@ -679,14 +711,18 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
   };
   /* Pass 1 for each strand, passes 2 and 3 for all in one vector; a lane whose strand has no
    * part in a stage repeats another's (its result is dropped). */
+  const bool implicit = params_.integrator == Integrator::Implicit;
   const auto recursion = [&](const auto &source_lane) {
+    Lanes hd;
     for (int lane = 0; lane < lane_width; lane++) {
-      const std::vector<ArticulatedBody> &source = lane_bodies[source_lane(lane)];
-      for (size_t i = 0; i < n; i++) {
-        load(lane_links[i], lane, source[i], true);
+      const int source = source_lane(lane);
+      hd[lane] = double(steps[source].h);
+      for (size_t i = 0; source != lane && i < n; i++) {
+        copy_lane(lane_terms[i], source, lane);
       }
     }
-    recursion_lanes(lane_links.data(), n);
+    recursion_lanes(lane_links.data(), lane_terms.data(), n, hd, implicit,
+                    double(params_.bending_damping));
   };
   /* Stage 0, for the strands whose trend is not known: the predictor's q̈ at the step's start
    * rates; stage 1 takes the step from the rates at its middle (see the top). The shape and
@@ -700,7 +736,8 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
         r_outcomes[lane] = steps_needed(
             lane, articulated_forward(curves[lane], steps[lane], root_frames[lane], winds[lane],
                                       lane_mid_accelerations[lane], true,
-                                      lane_bodies[lane].data(), predictor_counts));
+                                      lane_bodies[lane].data(), lane_terms.data(), lane,
+                                      predictor_counts));
       }
     }
     recursion([&](const int lane) {
@@ -722,7 +759,7 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
     }
     const float fastest_turn = articulated_forward(
         curves[lane], steps[lane], root_frames[lane], winds[lane], lane_mid_accelerations[lane],
-        !predict[lane], lane_bodies[lane].data(), lane_counts[lane]);
+        !predict[lane], lane_bodies[lane].data(), lane_terms.data(), lane, lane_counts[lane]);
     if (!predict[lane]) {
       r_outcomes[lane] = steps_needed(lane, fastest_turn);
     }

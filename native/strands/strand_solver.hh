@@ -239,8 +239,10 @@ class StrandSolver {
   /* m, the fixed length of the segment ending at `point`. */
   float segment_length(int64_t point) const { return rest_lengths_[size_t(point)]; }
 
- /* A body of the articulated chain during a step (strand_dynamics_articulated.cpp). */
+ /* A body of the articulated chain during a step, and what pass 1 hands the recursion for
+   * it (strand_dynamics_articulated.cpp). */
   struct ArticulatedBody;
+  struct ArticulatedTerms;
 
  private:
   struct Counts {
@@ -297,7 +299,8 @@ class StrandSolver {
    * or across a hinge. */
   float articulated_forward(int64_t curve, const Substep &substep, const mat3 &root_frame,
                             const vec3 &wind_wo, Span<vec2> mid_accelerations, bool shape,
-                            ArticulatedBody *chain_bodies, Counts &counts) const;
+                            ArticulatedBody *chain_bodies, ArticulatedTerms *terms, int lane,
+                            Counts &counts) const;
   /* The step's hinge accelerations into rates and angles, then the new shape with the
    * no-penetration projection; the projected segments are left in a list whose impulses the
    * caller applies. False when the strand ran away. */
