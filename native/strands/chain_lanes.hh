@@ -77,11 +77,11 @@ HAIRDYN_CHAIN_INLINE Lanes widen(const Floats &x)
 }
 HAIRDYN_CHAIN_INLINE V2<Lanes> widen(const V2<Floats> &v)
 {
-  return {widen(v.x), widen(v.y)};
+  return { widen(v.x), widen(v.y) };
 }
 HAIRDYN_CHAIN_INLINE V3<Lanes> widen(const V3<Floats> &v)
 {
-  return {widen(v.x), widen(v.y), widen(v.z)};
+  return { widen(v.x), widen(v.y), widen(v.z) };
 }
 template<class R> HAIRDYN_CHAIN_INLINE glm::dvec2 get(const V2<R> &v, const int lane)
 {
@@ -139,7 +139,7 @@ template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const R &s, const V3<R> &
 }
 template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator*(const R &s, const V2<R> &v)
 {
-  return {s * v.x, s * v.y};
+  return { s * v.x, s * v.y };
 }
 template<class R> HAIRDYN_CHAIN_INLINE R dot(const V3<R> &a, const V3<R> &b)
 {
@@ -163,7 +163,7 @@ template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &m)
 }
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator*(const R &s, const M3<R> &m)
 {
-  return {{s * m.c[0], s * m.c[1], s * m.c[2]}};
+  return { { s * m.c[0], s * m.c[1], s * m.c[2] } };
 }
 /* m v */
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const M3<R> &m, const V3<R> &v)
