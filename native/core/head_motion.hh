@@ -47,8 +47,9 @@ struct HeadVelocity {
 
   /* Finite difference of two poses dt seconds apart (rotation: the shortest arc). */
   static HeadVelocity between(const HeadPose &from, const HeadPose &to, float dt);
-  /* m/s, velocity of the head-fixed point at `arm` = r − c from the head's origin. */
-  vec3 of_point(const vec3 &arm) const { return linear + glm::cross(angular, arm); }
+  /* m/s, velocity of the head-fixed point at `arm` = r − c from the head's origin (a vec3,
+   * or several points in lanes: strands/chain_lanes.hh). */
+  template<class V> V of_point(const V &arm) const { return linear + cross(angular, arm); }
 };
 
 /* The head's rigid-body acceleration field at one instant. */

@@ -8,6 +8,8 @@
  * builds as ISO C++, where GCC contracts no multiply-add. So a strand's step gives the same
  * bits in any lane of a vector as alone, whatever the instruction set the vector code was
  * compiled for (test StrandsArticulated.LanesGiveEachStrandItsOwnBits). */
+#include <cmath>
+
 #include "core/math.hh"
 
 /* Functions on Lanes are always inlined, so no vector crosses a call: the warning that one
@@ -70,6 +72,41 @@ HAIRDYN_CHAIN_INLINE void put(V3<Floats> &v, const int lane, const glm::vec3 &va
   v.y[lane] = value.y;
   v.z[lane] = value.z;
 }
+/* Single-precision lanes with one value for every lane (a glm scalar, vector or matrix):
+ * the same operations as glm's on each lane. */
+HAIRDYN_CHAIN_INLINE V3<Floats> operator*(const float s, const V3<Floats> &v)
+{
+  return { s * v.x, s * v.y, s * v.z };
+}
+HAIRDYN_CHAIN_INLINE V3<Floats> operator+(const glm::vec3 &a, const V3<Floats> &b)
+{
+  return { a.x + b.x, a.y + b.y, a.z + b.z };
+}
+HAIRDYN_CHAIN_INLINE V3<Floats> operator*(const glm::mat3 &m, const V3<Floats> &v)
+{
+  return { m[0][0] * v.x + m[1][0] * v.y + m[2][0] * v.z,
+           m[0][1] * v.x + m[1][1] * v.y + m[2][1] * v.z,
+           m[0][2] * v.x + m[1][2] * v.y + m[2][2] * v.z };
+}
+HAIRDYN_CHAIN_INLINE V3<Floats> cross(const glm::vec3 &x, const V3<Floats> &y)
+{
+  return { x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y };
+}
+/* Each lane's square root (correctly rounded, as std::sqrt). */
+HAIRDYN_CHAIN_INLINE Floats sqrt(const Floats &x)
+{
+  Floats r;
+  for (int lane = 0; lane < lane_width; lane++) {
+    r[lane] = std::sqrt(x[lane]);
+  }
+  return r;
+}
+/* std::max(a, b) in each lane: (a < b) ? b : a. */
+HAIRDYN_CHAIN_INLINE Floats max(const Floats &a, const Floats &b)
+{
+  return a < b ? b : a;
+}
+
 /* Single-precision lanes in double precision (exact). */
 HAIRDYN_CHAIN_INLINE Lanes widen(const Floats &x)
 {
@@ -148,6 +185,10 @@ template<class R> HAIRDYN_CHAIN_INLINE R dot(const V3<R> &a, const V3<R> &b)
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> cross(const V3<R> &x, const V3<R> &y)
 {
   return { x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y };
+}
+template<class R> HAIRDYN_CHAIN_INLINE R length(const V3<R> &v)
+{
+  return sqrt(dot(v, v));
 }
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator+(const M3<R> &a, const M3<R> &b)
 {

@@ -8,6 +8,18 @@
 
 namespace hairdyn {
 
+/* chart · D without forming D: each column of D is a combination of chart's columns
+ * (chart[0..2], r_frame[0..2]). For any scalar S and vector V with these operations: one
+ * strand's (Deflection::rotate) or several strands' in lanes. */
+template<class S, class V>
+inline void rotate_chart(const S &sin_theta, const S &cos_theta, const S &sin_phi,
+                         const S &cos_phi, const V *chart, V *r_frame)
+{
+  r_frame[0] = cos_theta * chart[0] - sin_theta * (sin_phi * chart[1] + cos_phi * chart[2]);
+  r_frame[1] = cos_phi * chart[1] - sin_phi * chart[2];
+  r_frame[2] = sin_theta * chart[0] + cos_theta * (sin_phi * chart[1] + cos_phi * chart[2]);
+}
+
 struct Deflection {
   float sin_theta, cos_theta, sin_phi, cos_phi;
 
@@ -25,14 +37,13 @@ struct Deflection {
   }
   vec4 trig() const { return vec4(sin_theta, cos_theta, sin_phi, cos_phi); }
 
-  /* chart · D without forming D: each column of D is a combination of chart's columns. */
+  /* chart · D (rotate_chart). */
   mat3 rotate(const mat3 &chart) const
   {
-    const vec3 e_theta = cos_theta * chart[0] -
-                         sin_theta * (sin_phi * chart[1] + cos_phi * chart[2]);
-    const vec3 e_phi = cos_phi * chart[1] - sin_phi * chart[2];
-    const vec3 d = sin_theta * chart[0] + cos_theta * (sin_phi * chart[1] + cos_phi * chart[2]);
-    return mat3(e_theta, e_phi, d);
+    const vec3 columns[3] = {chart[0], chart[1], chart[2]};
+    vec3 frame[3];
+    rotate_chart(sin_theta, cos_theta, sin_phi, cos_phi, columns, frame);
+    return mat3(frame[0], frame[1], frame[2]);
   }
 };
 

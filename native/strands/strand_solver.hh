@@ -72,15 +72,15 @@ struct ForceField {
   /* N, the force on a segment of length d whose centre is at r, moving at v, over a step of
    * h. The form drag is explicit; it is limited to what it can do over the step, q |u|² / (1 +
    * h q |u| / c) (linearly implicit in the speed |u| relative to the air), so it slows a
-   * segment down and never turns it around, whatever the step. */
-  vec3 on_segment(const float d, const vec3 &r, const vec3 &v, const vec3 &wind,
-                  const float h) const
+   * segment down and never turns it around, whatever the step. S and V: float and vec3, or
+   * several segments in lanes (strands/chain_lanes.hh). */
+  template<class S, class V>
+  V on_segment(const S &d, const V &r, const V &v, const V &wind, const S &h) const
   {
-    const vec3 relative = wind - v;
-    const float speed = glm::length(relative);
-    const float rate = form_drag * speed; /* kg/m/s */
-    const float drag = mass_per_length > 0.0f ? rate / (1.0f + h * rate / mass_per_length) :
-                                                rate;
+    const V relative = wind - v;
+    const S speed = length(relative);
+    const S rate = form_drag * speed; /* kg/m/s */
+    const S drag = mass_per_length > 0.0f ? rate / (1.0f + h * rate / mass_per_length) : rate;
     return d * (base + position_gradient * r + velocity_gradient * v + air_drag * wind +
                 drag * relative);
   }
