@@ -78,6 +78,18 @@ HAIRDYN_CHAIN_INLINE V3<Floats> operator*(const float s, const V3<Floats> &v)
 {
   return { s * v.x, s * v.y, s * v.z };
 }
+HAIRDYN_CHAIN_INLINE V3<Floats> operator-(const V3<Floats> &a, const glm::vec3 &b)
+{
+  return { a.x - b.x, a.y - b.y, a.z - b.z };
+}
+HAIRDYN_CHAIN_INLINE float get(const Floats &x, const int lane)
+{
+  return x[lane];
+}
+HAIRDYN_CHAIN_INLINE glm::vec3 get(const V3<Floats> &v, const int lane)
+{
+  return glm::vec3(v.x[lane], v.y[lane], v.z[lane]);
+}
 HAIRDYN_CHAIN_INLINE V3<Floats> operator+(const glm::vec3 &a, const V3<Floats> &b)
 {
   return { a.x + b.x, a.y + b.y, a.z + b.z };

@@ -88,19 +88,11 @@ using rvec3 = glm::dvec3;
 using rmat2 = glm::dmat2;
 using rmat3 = glm::dmat3;
 
-/* One body of the chain during a step, as pass 1 leaves it (single-precision geometry and
- * contact, and the recursion's inputs in double precision). */
-struct StrandSolver::ArticulatedBody {
-  vec3 t, e_theta, pole;     /* the segment's direction, frame[1] and its chart's x axis */
-  rvec3 reach;               /* d t, from the hinge point to the segment's tip */
-  bool touches;              /* the segment's tip is inside a collider: at `contact` */
-  Contact contact;
-};
-
 /* What pass 1 hands the recursion for one body, in single precision, one lane per strand:
  * the recursion widens it and builds the rod's inertia and bias forces from it. */
 struct StrandSolver::ArticulatedTerms {
-  chain::V3<chain::Floats> t, pole, e_theta; /* the segment's frame, as in ArticulatedBody */
+  chain::V3<chain::Floats> t, e_theta, pole; /* the segment's direction, frame[1] and its
+                                              * chart's x axis */
   chain::V3<chain::Floats> arm;              /* r, from the parent's hinge point to this one */
   chain::V3<chain::Floats> parent_omega;     /* the parent's turn, relative to the head */
   chain::V3<chain::Floats> relative_turn;    /* θ̇ e_θ − φ̇ x across the hinge */
@@ -309,20 +301,9 @@ void recursion_lanes(Link<Lanes> *links, const Terms *terms, const size_t n, con
   recursion_lanes_baseline(links, terms, n, hd, implicit, damping);
 }
 
-/* Copies lane `from` of a body's terms to lane `to` (every member is one vector of Floats). */
-void copy_lane(Terms &terms, const int from, const int to)
-{
-  static_assert(sizeof(Terms) % sizeof(chain::Floats) == 0);
-  chain::Floats *lanes = reinterpret_cast<chain::Floats *>(&terms);
-  for (size_t j = 0; j < sizeof(Terms) / sizeof(chain::Floats); j++) {
-    lanes[j][to] = lanes[j][from];
-  }
-}
-
 /* A step's scratch, per lane: pass 1's bodies and the mid-step rates' q̈; the recursion's
  * links; a strand's q̈ and its projected segments (body, outward normal); the nodes where a
  * cut substep began. */
-thread_local std::vector<StrandSolver::ArticulatedBody> lane_bodies[lane_width];
 thread_local std::vector<vec2> lane_mid_accelerations[lane_width];
 thread_local std::vector<Link<Lanes>> lane_links;
 thread_local std::vector<Terms> lane_terms;
@@ -336,16 +317,6 @@ inline rvec3 real(const vec3 &v)
   return rvec3(v);
 }
 
-inline rmat3 cross_matrix(const rvec3 &v)
-{
-  return rmat3(0.0, v.z, -v.y, -v.z, 0.0, v.x, v.y, -v.x, 0.0);
-}
-
-inline rmat3 outer(const rvec3 &x, const rvec3 &y)
-{
-  return rmat3(x * y.x, x * y.y, x * y.z); /* x yᵀ, column-major */
-}
-
 /* The inelastic contact at the tip of body `hit` of lane `lane`: if the tip moves into the
  * surface of outward normal n (relative to the head, from the hinge rates and the step's
  * geometry), the impulse λ n with λ = −v_n / (n · Δv(n)) stops that motion, Δv(n) being the
@@ -356,14 +327,14 @@ inline rmat3 outer(const rvec3 &x, const rvec3 &y)
  * p^a = p^A + U D⁻¹ u, u = −Sᵀ p^A, handed to the parents; root to tip,
  * Δq̇ = D⁻¹ (u − Uᵀ a'). The kinetic energy changes by −v_n² / (2 n · Δv(n)) ≤ 0. */
 template<class R>
-void stop_at_contact(const Link<R> *chain, const StrandSolver::ArticulatedBody *chain_bodies,
-                     const int lane, const size_t n, const size_t hit, const rvec3 &n_out,
-                     const MutableSpan<vec2> rates)
+void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, const size_t n,
+                     const size_t hit, const rvec3 &n_out, const MutableSpan<vec2> rates)
 {
   const auto s_theta = [&](const size_t k) { return get(chain[k].s_theta, lane); };
   const auto s_phi = [&](const size_t k) { return get(chain[k].s_phi, lane); };
   const auto arm = [&](const size_t k) { return get(chain[k].arm, lane); };
-  const rvec3 reach = chain_bodies[hit].reach;
+  /* d t, from the hinge point to the segment's tip */
+  const rvec3 reach = real(chain::get(terms[hit].d, lane) * chain::get(terms[hit].t, lane));
   /* The tip's velocity: Ω_k = Ω_{k-1} + S_k q̇_k, v(P_k) = v(P_{k-1}) + Ω_{k-1} × r_k. */
   rvec3 omega(0.0), v(0.0);
   for (size_t k = 0; k <= hit; k++) {
@@ -526,87 +497,121 @@ void StrandSolver::mid_step_accelerations(const int64_t curve,
   }
 }
 
-float StrandSolver::articulated_forward(const int64_t curve, const Substep &substep,
-                                        const mat3 &root_frame, const vec3 &wind_wo,
-                                        const Span<vec2> mid_rates_accelerations,
-                                        const bool shape, ArticulatedBody *chain_bodies,
-                                        ArticulatedTerms *terms, const int lane,
-                                        Counts &counts) const
+void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Substep> steps,
+                                       const Span<mat3> root_frames, const Span<vec3> winds,
+                                       const Span<const vec2 *> mid_accelerations,
+                                       const Span<uint8_t> queried, ArticulatedTerms *terms,
+                                       float *r_fastest_turn, Counts *r_counts) const
 {
-  /* Pass 1, root to tip (Table 7.1, first loop): geometry, relative velocities, the velocity
-   * products and the external force F on each rod (its inertia and bias force follow from
-   * them in double precision: fill_links). */
-  const IndexRange points = curve_points(curve_offsets_, curve);
-  const float h = substep.h;
-  const size_t first = size_t(points.start) + 1;
-  const size_t end = size_t(points.one_after_last());
+  /* Pass 1, root to tip (Table 7.1, first loop), lane_width strands at once: geometry,
+   * relative velocities, the rates at the middle of the step and the external force F on
+   * each rod, every operation glm's on each lane (the rod's inertia and bias forces follow
+   * from these terms in double precision: fill_links). */
+  using chain::Floats;
+  using chain::get;
+  using chain::put;
+  using chain::V2;
+  using chain::V3;
+  size_t first[lane_width];
+  for (int lane = 0; lane < lane_width; lane++) {
+    first[lane] = size_t(curve_offsets_[size_t(curves[lane])]) + 1;
+  }
+  const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
   const float density = line_density();
-  mat3 frame = root_frame;
-  vec3 node = positions_wo_[size_t(points.start)];
-  vec3 node_velocity(0.0f);   /* relative to the head */
-  vec3 parent_omega(0.0f);    /* relative to the head */
-  vec3 arm(0.0f);
-  float fastest_turn = 0.0f; /* rad/s, of a segment or across a hinge */
-  const vec3 head_center = substep.pose.translation;
-  for (size_t i = first; i < end; i++) {
-    ArticulatedBody &body = chain_bodies[i - first];
-    ArticulatedTerms &x = terms[i - first];
-    const float d = rest_lengths_[i];
-    const float m = density * d;
-    if (shape) {
-      const mat3 chart = frame * rest_rotations_[i];
-      frame = Deflection(trig_[i]).rotate(chart);
-      body.t = frame[2];
-      body.e_theta = frame[1];
-      body.pole = chart[0];
-      body.reach = real(d * body.t);
+  /* The head, its forces and the wind field are the substep's for every lane; only the step
+   * length h differs between lanes (a strand cutting its substep). */
+  const Substep &shared = steps[0];
+  const vec3 head_center = shared.pose.translation;
+  Floats h;
+  M3<Floats> frame;
+  V3<Floats> node, wind;
+  for (int lane = 0; lane < lane_width; lane++) {
+    h[lane] = steps[lane].h;
+    for (int j = 0; j < 3; j++) {
+      put(frame.c[j], lane, root_frames[lane][j]);
     }
-    const vec3 t = body.t;
-    const vec2 rate = angular_velocities_[i] + (0.5f * h) * mid_rates_accelerations[i - first];
-    const vec3 relative_turn = rate.x * body.e_theta - rate.y * body.pole;
-    node += arm;
-    node_velocity += glm::cross(parent_omega, arm);
-    const vec3 omega = parent_omega + relative_turn;
-    if (shape) {
-      fastest_turn =
-          std::max(fastest_turn, std::max(glm::length(omega), glm::length(relative_turn)));
+    put(node, lane, positions_wo_[first[lane] - 1]);
+    put(wind, lane, winds[lane]);
+  }
+  const Floats half_h = 0.5f * h;
+  V3<Floats> node_velocity{}; /* relative to the head */
+  V3<Floats> parent_omega{};  /* relative to the head */
+  V3<Floats> arm{};
+  Floats fastest_turn{}; /* rad/s, of a segment or across a hinge */
+  for (size_t i = 0; i < n; i++) {
+    M3<Floats> rest;
+    Floats trig[4], d, k;
+    V2<Floats> rates, mid, angles;
+    for (int lane = 0; lane < lane_width; lane++) {
+      const size_t p = first[lane] + i;
+      for (int j = 0; j < 3; j++) {
+        put(rest.c[j], lane, rest_rotations_[p][j]);
+      }
+      for (int j = 0; j < 4; j++) {
+        trig[j][lane] = trig_[p][j];
+      }
+      d[lane] = rest_lengths_[p];
+      k[lane] = hinge_stiffness_[p];
+      put(rates, lane, angular_velocities_[p]);
+      put(mid, lane, mid_accelerations[lane][i]);
+      put(angles, lane, angles_[p]);
     }
+    const Floats m = density * d;
+    const M3<Floats> chart{{frame * rest.c[0], frame * rest.c[1], frame * rest.c[2]}};
+    rotate_chart(trig[0], trig[1], trig[2], trig[3], chart.c, frame.c);
+    const V3<Floats> t = frame.c[2], e_theta = frame.c[1], pole = chart.c[0];
+    const V2<Floats> rate = rates + half_h * mid;
+    const V3<Floats> relative_turn = rate.x * e_theta - rate.y * pole;
+    node = node + arm;
+    node_velocity = node_velocity + cross(parent_omega, arm);
+    const V3<Floats> omega = parent_omega + relative_turn;
+    fastest_turn = chain::max(fastest_turn, chain::max(length(omega), length(relative_turn)));
 
     /* The external force at the centre (Kurihara 1993, eq. 6; reaction constraint eq. 12–15
      * where the tip is inside a collider), from world velocities. */
-    const vec3 half = (0.5f * d) * t;
-    const vec3 center = node + half;
-    const vec3 tip = node + d * t;
-    const vec3 center_velocity = node_velocity + glm::cross(omega, half) +
-                                 substep.head_velocity.of_point(center - head_center);
-    const vec3 tip_velocity = node_velocity + glm::cross(omega, d * t) +
-                              substep.head_velocity.of_point(tip - head_center);
-    if (shape) { /* the shape, and so the tip's contact, is the same in both stages */
-      body.touches = colliders_ != nullptr && colliders_->find_contact(tip, body.contact);
+    const V3<Floats> half = (0.5f * d) * t;
+    const V3<Floats> center = node + half;
+    const V3<Floats> tip = node + d * t;
+    const V3<Floats> center_velocity = node_velocity + cross(omega, half) +
+                                       shared.head_velocity.of_point(center - head_center);
+    const V3<Floats> tip_velocity = node_velocity + cross(omega, d * t) +
+                                    shared.head_velocity.of_point(tip - head_center);
+    V3<Floats> force = shared.forces.on_segment(d, center, center_velocity, wind, h);
+    for (int lane = 0; colliders_ != nullptr && lane < lane_width; lane++) {
+      Contact contact;
+      if (queried[lane] && colliders_->find_contact(get(tip, lane), contact)) {
+        /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
+        const float mass = density * d[lane];
+        put(force, lane,
+            mass * reaction_constraint_force(get(force, lane) / mass, get(tip_velocity, lane),
+                                             contact, steps[lane].reaction));
+        r_counts[lane].contacts++;
+      }
     }
-    const vec3 force = segment_force(substep, i, center, center_velocity,
-                                     body.touches ? &body.contact : nullptr, tip_velocity,
-                                     wind_wo, counts);
-    put(x.t, lane, t);
-    put(x.pole, lane, body.pole);
-    put(x.e_theta, lane, body.e_theta);
-    put(x.arm, lane, arm);
-    put(x.parent_omega, lane, parent_omega);
-    put(x.relative_turn, lane, relative_turn);
-    put(x.omega, lane, omega);
-    put(x.half, lane, half);
-    put(x.force, lane, force);
-    put(x.rate_product, lane, rate.x * rate.y);
-    put(x.m, lane, m);
-    put(x.d, lane, d);
-    put(x.k, lane, hinge_stiffness_[i]);
-    put(x.angles, lane, angles_[i]);
-    put(x.rates, lane, angular_velocities_[i]);
+
+    ArticulatedTerms &x = terms[i];
+    x.t = t;
+    x.e_theta = e_theta;
+    x.pole = pole;
+    x.arm = arm;
+    x.parent_omega = parent_omega;
+    x.relative_turn = relative_turn;
+    x.omega = omega;
+    x.half = half;
+    x.force = force;
+    x.rate_product = rate.x * rate.y;
+    x.m = m;
+    x.d = d;
+    x.k = k;
+    x.angles = angles;
+    x.rates = rates;
 
     parent_omega = omega;
     arm = d * t;
   }
-  return fastest_turn;
+  for (int lane = 0; lane < lane_width; lane++) {
+    r_fastest_turn[lane] = fastest_turn[lane];
+  }
 }
 
 bool StrandSolver::articulated_commit(const int64_t curve, const Substep &substep,
@@ -692,14 +697,28 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
   lane_links.resize(n);
   lane_terms.resize(n);
   accelerations.resize(n);
+  /* Every lane holds a strand: those past the group's repeat its first (their results are
+   * dropped). */
+  int64_t lane_curves[lane_width];
+  Substep lane_steps[lane_width];
+  mat3 lane_frames[lane_width];
+  vec3 lane_winds[lane_width];
+  const vec2 *mids[lane_width];
   bool predict[lane_width];
-  int predicting_lane = -1;
-  for (int lane = 0; lane < lanes_num; lane++) {
-    predict[lane] = accelerations_known_[size_t(curves[lane])] < 2;
-    predicting_lane = predict[lane] && predicting_lane < 0 ? lane : predicting_lane;
-    lane_bodies[lane].resize(n);
+  bool any_predict = false;
+  for (int lane = 0; lane < lane_width; lane++) {
+    const int from = lane < lanes_num ? lane : 0;
+    lane_curves[lane] = curves[from];
+    lane_steps[lane] = steps[from];
+    lane_frames[lane] = root_frames[from];
+    lane_winds[lane] = winds[from];
     lane_mid_accelerations[lane].resize(n);
-    r_outcomes[lane] = 1;
+    mids[lane] = lane_mid_accelerations[from].data();
+    predict[lane] = lane < lanes_num && accelerations_known_[size_t(curves[lane])] < 2;
+    any_predict |= predict[lane];
+    if (lane < lanes_num) {
+      r_outcomes[lane] = 1;
+    }
   }
   /* The number of steps that keep a strand's turns within max_turn_per_step, if it may cut
    * its step and must. */
@@ -709,65 +728,60 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
                std::min(int(std::ceil(turn / max_turn_per_step)), max_turn_steps) :
                1;
   };
-  /* Pass 1 for each strand, passes 2 and 3 for all in one vector; a lane whose strand has no
-   * part in a stage repeats another's (its result is dropped). */
+  /* Pass 1 (the contacts queried for the strands that take part, `queried`), then passes 2
+   * and 3, for all lanes in vectors. */
   const bool implicit = params_.integrator == Integrator::Implicit;
-  const auto recursion = [&](const auto &source_lane) {
+  float fastest_turn[lane_width];
+  Counts lane_counts[lane_width];
+  const auto stage = [&](const uint8_t *queried) {
     Lanes hd;
     for (int lane = 0; lane < lane_width; lane++) {
-      const int source = source_lane(lane);
-      hd[lane] = double(steps[source].h);
-      for (size_t i = 0; source != lane && i < n; i++) {
-        copy_lane(lane_terms[i], source, lane);
-      }
+      hd[lane] = double(lane_steps[lane].h);
+      lane_counts[lane] = Counts();
     }
+    articulated_forward(Span<int64_t>(lane_curves, lane_width),
+                        Span<Substep>(lane_steps, lane_width), Span<mat3>(lane_frames, lane_width),
+                        Span<vec3>(lane_winds, lane_width),
+                        Span<const vec2 *>(mids, lane_width),
+                        Span<uint8_t>(queried, lane_width), lane_terms.data(), fastest_turn,
+                        lane_counts);
     recursion_lanes(lane_links.data(), lane_terms.data(), n, hd, implicit,
                     double(params_.bending_damping));
   };
   /* Stage 0, for the strands whose trend is not known: the predictor's q̈ at the step's start
-   * rates; stage 1 takes the step from the rates at its middle (see the top). The shape and
-   * the contacts are found by a strand's first stage and kept by its second (whose recursion
-   * finds U, D and I^a again from them: the same values). */
-  if (predicting_lane >= 0) {
-    for (int lane = 0; lane < lanes_num; lane++) {
+   * rates (the fastest turn, and so a cut step, judged on them); stage 1 takes the step from
+   * the rates at its middle (see the top). */
+  uint8_t queried[lane_width];
+  if (any_predict) {
+    for (int lane = 0; lane < lane_width; lane++) {
+      queried[lane] = predict[lane];
       if (predict[lane]) {
         mid_step_accelerations(curves[lane], lane_mid_accelerations[lane]);
-        Counts predictor_counts; /* only the step's contacts count */
-        r_outcomes[lane] = steps_needed(
-            lane, articulated_forward(curves[lane], steps[lane], root_frames[lane], winds[lane],
-                                      lane_mid_accelerations[lane], true,
-                                      lane_bodies[lane].data(), lane_terms.data(), lane,
-                                      predictor_counts));
       }
     }
-    recursion([&](const int lane) {
-      return lane < lanes_num && predict[lane] ? lane : predicting_lane;
-    });
+    stage(queried);
     for (int lane = 0; lane < lanes_num; lane++) {
-      for (size_t i = 0; predict[lane] && i < n; i++) {
-        lane_mid_accelerations[lane][i] = vec2(get(lane_links[i].acceleration, lane));
+      if (predict[lane]) {
+        r_outcomes[lane] = steps_needed(lane, fastest_turn[lane]);
+        for (size_t i = 0; i < n; i++) {
+          lane_mid_accelerations[lane][i] = vec2(get(lane_links[i].acceleration, lane));
+        }
       }
     }
   }
-  Counts lane_counts[lane_width];
-  for (int lane = 0; lane < lanes_num; lane++) {
-    if (r_outcomes[lane] > 1) {
-      continue; /* unchanged: the caller cuts its step */
-    }
-    if (!predict[lane]) {
+  for (int lane = 0; lane < lane_width; lane++) {
+    queried[lane] = lane < lanes_num && r_outcomes[lane] == 1;
+    if (queried[lane] && !predict[lane]) {
       mid_step_accelerations(curves[lane], lane_mid_accelerations[lane]);
     }
-    const float fastest_turn = articulated_forward(
-        curves[lane], steps[lane], root_frames[lane], winds[lane], lane_mid_accelerations[lane],
-        !predict[lane], lane_bodies[lane].data(), lane_terms.data(), lane, lane_counts[lane]);
-    if (!predict[lane]) {
-      r_outcomes[lane] = steps_needed(lane, fastest_turn);
-    }
   }
-  recursion([&](const int lane) { return lane < lanes_num ? lane : 0; });
+  stage(queried);
   for (int lane = 0; lane < lanes_num; lane++) {
+    if (!predict[lane] && r_outcomes[lane] == 1) {
+      r_outcomes[lane] = steps_needed(lane, fastest_turn[lane]);
+    }
     if (r_outcomes[lane] > 1) {
-      continue;
+      continue; /* unchanged: the caller cuts its step */
     }
     const int64_t curve = curves[lane];
     const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
@@ -781,7 +795,7 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
     }
     counts.projections += int64_t(stops.size());
     for (const auto &[body, normal] : stops) {
-      stop_at_contact(lane_links.data(), lane_bodies[lane].data(), lane, n, body, real(normal),
+      stop_at_contact(lane_links.data(), lane_terms.data(), lane, n, body, real(normal),
                       MutableSpan<vec2>(angular_velocities_).slice(int64_t(first), int64_t(n)));
     }
   }

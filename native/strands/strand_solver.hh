@@ -239,9 +239,8 @@ class StrandSolver {
   /* m, the fixed length of the segment ending at `point`. */
   float segment_length(int64_t point) const { return rest_lengths_[size_t(point)]; }
 
- /* A body of the articulated chain during a step, and what pass 1 hands the recursion for
-   * it (strand_dynamics_articulated.cpp). */
-  struct ArticulatedBody;
+ /* What pass 1 of the articulated step hands its recursion for a segment, for the strands of
+   * a group (strand_dynamics_articulated.cpp). */
   struct ArticulatedTerms;
 
  private:
@@ -292,15 +291,16 @@ class StrandSolver {
   /* The q̈ that the mid-step rates of strand `curve`'s next step take: the last two steps'
    * extrapolated, or zeros (a predictor stage's) when they are not both known. */
   void mid_step_accelerations(int64_t curve, MutableSpan<vec2> r_accelerations) const;
-  /* Pass 1 of an articulated step, root to tip: the shape (with `shape`: each segment's frame,
-   * the tip's contact and the rod's inertia; else as the bodies hold it), the rates at the
-   * middle of the step (q̇ + h q̈ / 2 with q̈ = `mid_accelerations`), the velocity products,
-   * the external forces and the hinge torques. Returns the fastest turn (rad/s) of a segment
-   * or across a hinge. */
-  float articulated_forward(int64_t curve, const Substep &substep, const mat3 &root_frame,
-                            const vec3 &wind_wo, Span<vec2> mid_accelerations, bool shape,
-                            ArticulatedBody *chain_bodies, ArticulatedTerms *terms, int lane,
-                            Counts &counts) const;
+  /* Pass 1 of an articulated step, root to tip, for chain_lanes strands of one point count at
+   * once, one lane each (a lane may repeat another's strand): the shape, the rates at the
+   * middle of the step (q̇ + h q̈ / 2 with q̈ = mid_accelerations[lane]), the velocity
+   * products, the external forces (the tips' contacts queried in the lanes `queried`, and
+   * counted per lane in r_counts) and the hinges, into `terms` (one per segment). Writes each
+   * lane's fastest turn (rad/s) of a segment or across a hinge. */
+  void articulated_forward(Span<int64_t> curves, Span<Substep> steps, Span<mat3> root_frames,
+                           Span<vec3> winds, Span<const vec2 *> mid_accelerations,
+                           Span<uint8_t> queried, ArticulatedTerms *terms,
+                           float *r_fastest_turn, Counts *r_counts) const;
   /* The step's hinge accelerations into rates and angles, then the new shape with the
    * no-penetration projection; the projected segments are left in a list whose impulses the
    * caller applies. False when the strand ran away. */
