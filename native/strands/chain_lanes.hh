@@ -23,6 +23,10 @@ constexpr int lane_width = 4;
 typedef double Lanes __attribute__((vector_size(lane_width * sizeof(double))));
 /* The same lanes in single precision (what pass 1 computes, widened exactly to Lanes). */
 typedef float Floats __attribute__((vector_size(lane_width * sizeof(float))));
+/* What memory the vector code reads must be aligned to: GCC gives a vector only 16-byte
+ * alignment where AVX is off (and drops an alignment attribute on a template argument),
+ * while the AVX code it calls loads it assuming its full size. */
+constexpr size_t lane_alignment = sizeof(Lanes);
 
 #define HAIRDYN_CHAIN_INLINE [[gnu::always_inline]] inline
 

@@ -64,6 +64,7 @@
 #include <atomic>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "core/cpu.hh"
@@ -90,7 +91,7 @@ using rmat3 = glm::dmat3;
 
 /* What pass 1 hands the recursion for one body, in single precision, one lane per strand:
  * the recursion widens it and builds the rod's inertia and bias forces from it. */
-struct StrandSolver::ArticulatedTerms {
+struct alignas(chain::lane_alignment) StrandSolver::ArticulatedTerms {
   chain::V3<chain::Floats> t, e_theta, pole; /* the segment's direction, frame[1] and its
                                               * chart's x axis */
   chain::V3<chain::Floats> arm;              /* r, from the parent's hinge point to this one */
@@ -117,9 +118,8 @@ using chain::V3;
 using chain::widen;
 
 /* A body in Featherstone's recursion, over lanes R (chain_lanes.hh). Aligned for the widest
- * vector loads: GCC gives a vector of Lanes only 16-byte alignment where AVX is off, and
- * loses an alignment attribute on a template argument. */
-template<class R> struct alignas(32) Link {
+ * vector loads (chain::lane_alignment), as everything the vector code reads from memory. */
+template<class R> struct alignas(chain::lane_alignment) Link {
   V3<R> s_theta, s_phi, arm;
   V3<R> bias_angular, bias_linear;
   /* The articulated inertia at P_i, blocks [a b; bᵀ c]: I^A, until pass 2 takes from it what
@@ -152,8 +152,11 @@ constexpr float axial_inertia_share = 1.0f;
  * spring and damper are linearly implicit (see the top of the file). */
 template<class R, class Terms>
 HAIRDYN_CHAIN_INLINE void fill_links(Link<R> *links, const Terms *terms, const size_t n,
-                                     const R &hd, const bool implicit, const double damping)
+                                     const double *step_lengths, const bool implicit,
+                                     const double damping)
 {
+  R hd;
+  std::memcpy(&hd, step_lengths, sizeof(hd)); /* no alignment assumed */
   const R zero{};
   const R one = zero + 1.0;
   const R spinless = zero + (1.0 - double(axial_inertia_share));
@@ -270,7 +273,7 @@ template<class R> HAIRDYN_CHAIN_INLINE void root_to_tip(Link<R> *links, const si
  * vectors the processor has (each lane's bits are the same on every path, chain_lanes.hh). */
 using Terms = StrandSolver::ArticulatedTerms;
 void recursion_lanes_baseline(Link<Lanes> *links, const Terms *terms, const size_t n,
-                              const Lanes &hd, const bool implicit, const double damping)
+                              const double *hd, const bool implicit, const double damping)
 {
   fill_links(links, terms, n, hd, implicit, damping);
   tip_to_root(links, n, true);
@@ -279,7 +282,7 @@ void recursion_lanes_baseline(Link<Lanes> *links, const Terms *terms, const size
 #if defined(__x86_64__)
 __attribute__((target("avx2"))) void recursion_lanes_avx2(Link<Lanes> *links,
                                                            const Terms *terms, const size_t n,
-                                                           const Lanes &hd, const bool implicit,
+                                                           const double *hd, const bool implicit,
                                                            const double damping)
 {
   fill_links(links, terms, n, hd, implicit, damping);
@@ -289,7 +292,7 @@ __attribute__((target("avx2"))) void recursion_lanes_avx2(Link<Lanes> *links,
 std::atomic<bool> use_avx2{cpu_has_avx2()};
 #endif
 
-void recursion_lanes(Link<Lanes> *links, const Terms *terms, const size_t n, const Lanes &hd,
+void recursion_lanes(Link<Lanes> *links, const Terms *terms, const size_t n, const double *hd,
                      const bool implicit, const double damping)
 {
 #if defined(__x86_64__)
@@ -734,7 +737,7 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
   float fastest_turn[lane_width];
   Counts lane_counts[lane_width];
   const auto stage = [&](const uint8_t *queried) {
-    Lanes hd;
+    double hd[lane_width];
     for (int lane = 0; lane < lane_width; lane++) {
       hd[lane] = double(lane_steps[lane].h);
       lane_counts[lane] = Counts();
