@@ -117,17 +117,12 @@ using chain::V2;
 using chain::V3;
 using chain::widen;
 
-/* A body in Featherstone's recursion, over lanes R (chain_lanes.hh). Aligned for the widest
- * vector loads (chain::lane_alignment), as everything the vector code reads from memory. */
+/* What the recursion keeps of a body for pass 3 and for contact impulses, over lanes R
+ * (chain_lanes.hh). Aligned for the widest vector loads (chain::lane_alignment), as everything
+ * the vector code reads from memory. */
 template<class R> struct alignas(chain::lane_alignment) Link {
   V3<R> s_theta, s_phi, arm;
   V3<R> bias_angular, bias_linear;
-  /* The articulated inertia at P_i, blocks [a b; bᵀ c]: I^A, until pass 2 takes from it what
-   * the hinge absorbs, I^a = I^A − U D⁻¹ Uᵀ. */
-  M3<R> a, b, c;
-  R armature;
-  V3<R> p_torque, p_force;   /* articulated bias force at P_i */
-  V2<R> hinge_torque;
   V3<R> u_angular[2], u_linear[2]; /* U = I^A S, one column per hinge axis */
   M2<R> d_inverse;
   V2<R> u;                   /* τ − Sᵀ p^A */
@@ -144,16 +139,20 @@ template<class R> struct alignas(chain::lane_alignment) Link {
  * is φ̇ sin θ, so bending near rest is unchanged to second order. */
 constexpr float axial_inertia_share = 1.0f;
 
-/* Each body's rod: its hinge axes, velocity products, inertia at P_i and bias force, and its
- * hinge torque, from pass 1's terms (in double precision; `hd`: each lane's step length).
+/* Pass 2, tip to root (Table 7.1, second loop), each body's rod built from pass 1's terms as
+ * the pass reaches it (in double precision; step_lengths: each lane's h): its hinge axes and
+ * velocity products, its inertia at P_i and bias force, and the hinge torque; then U = I^A S,
+ * D = Sᵀ U + armature, u = τ − Sᵀ p^A, and the body's articulated inertia and bias less what
+ * its hinge absorbs, I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the
+ * parent's hinge point and handed to it.
  *
  * The rod's inertia about P_i is m d² / 3 about every axis through P_i, its own axis included
  * (see axial_inertia_share), with the gyroscopic torque ω × (I ω) of that inertia; the hinge
  * spring and damper are linearly implicit (see the top of the file). */
 template<class R, class Terms>
-HAIRDYN_CHAIN_INLINE void fill_links(Link<R> *links, const Terms *terms, const size_t n,
-                                     const double *step_lengths, const bool implicit,
-                                     const double damping)
+HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const size_t n,
+                                      const double *step_lengths, const bool implicit,
+                                      const double damping)
 {
   R hd;
   std::memcpy(&hd, step_lengths, sizeof(hd)); /* no alignment assumed */
@@ -161,90 +160,82 @@ HAIRDYN_CHAIN_INLINE void fill_links(Link<R> *links, const Terms *terms, const s
   const R one = zero + 1.0;
   const R spinless = zero + (1.0 - double(axial_inertia_share));
   const M3<R> identity{{{one, zero, zero}, {zero, one, zero}, {zero, zero, one}}};
-  for (size_t i = 0; i < n; i++) {
+  /* What the child hands its parent: its I^a and p^a moved to the parent's hinge point (none
+   * for the tip). */
+  M3<R> child_a{}, child_b{}, child_c{};
+  V3<R> child_torque{}, child_force{};
+  for (size_t i = n; i-- > 0;) {
     const Terms &x = terms[i];
-    Link<R> &link = links[i];
+    Link<R> &body = links[i];
     const V3<R> t = widen(x.t), pole = widen(x.pole), arm = widen(x.arm);
     const V3<R> parent_omega = widen(x.parent_omega), omega = widen(x.omega);
     const V3<R> half = widen(x.half), force = widen(x.force);
     const R m = widen(x.m), d = widen(x.d), k = widen(x.k);
-    link.s_theta = widen(x.e_theta);
-    link.s_phi = -pole;
-    link.arm = arm;
-    link.bias_angular = cross(parent_omega, widen(x.relative_turn)) -
-                        widen(x.rate_product) * cross(pole, link.s_theta);
-    link.bias_linear = cross(parent_omega, cross(parent_omega, arm));
+    body.s_theta = widen(x.e_theta);
+    body.s_phi = -pole;
+    body.arm = arm;
+    body.bias_angular = cross(parent_omega, widen(x.relative_turn)) -
+                        widen(x.rate_product) * cross(pole, body.s_theta);
+    body.bias_linear = cross(parent_omega, cross(parent_omega, arm));
     const R transverse = m * d * d / 3.0;
-    link.a = transverse * (identity - spinless * chain::outer(t, t));
-    link.b = {{{m * zero, m * half.z, m * -half.y},
-               {m * -half.z, m * zero, m * half.x},
-               {m * half.y, m * -half.x, m * zero}}};
-    link.c = {{{m, zero, zero}, {zero, m, zero}, {zero, zero, m}}};
+    M3<R> a = transverse * (identity - spinless * chain::outer(t, t));
+    M3<R> b{{{m * zero, m * half.z, m * -half.y},
+             {m * -half.z, m * zero, m * half.x},
+             {m * half.y, m * -half.x, m * zero}}};
+    M3<R> c{{{m, zero, zero}, {zero, m, zero}, {zero, zero, m}}};
     const R gamma = damping * k; /* Kelvin–Voigt: γ = τ k */
-    link.armature = implicit ? hd * gamma + hd * hd * k : zero;
-    link.p_torque = -(spinless * transverse) * dot(t, omega) * cross(omega, t) -
-                    cross(half, force);
-    link.p_force = m * cross(omega, cross(omega, half)) - force;
-    link.hinge_torque = -k * widen(x.angles) - (implicit ? gamma + hd * k : gamma) *
-                                                   widen(x.rates);
-  }
-}
-
-/* Pass 2, tip to root (Table 7.1, second loop): U = I^A S, D = Sᵀ U + armature,
- * u = τ − Sᵀ p^A; the body's articulated inertia and bias less what its hinge absorbs,
- * I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the parent's hinge point.
- * U, D and I^a depend on the shape and the step alone: the first stage (`shape`) computes
- * them, and a second only carries the bias forces. */
-template<class R> HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const size_t n,
-                                                         const bool shape)
-{
-  for (size_t i = n; i-- > 0;) {
-    Link<R> &body = links[i];
-    const V3<R> axes[2] = {body.s_theta, body.s_phi};
-    if (shape) {
-      for (int j = 0; j < 2; j++) {
-        body.u_angular[j] = body.a * axes[j];
-        body.u_linear[j] = chain::transpose_times(body.b, axes[j]);
-      }
-      M2<R> d_matrix{{{dot(axes[0], body.u_angular[0]), dot(axes[1], body.u_angular[0])},
-                      {dot(axes[0], body.u_angular[1]), dot(axes[1], body.u_angular[1])}}};
-      d_matrix.c[0].x = d_matrix.c[0].x + body.armature;
-      d_matrix.c[1].y = d_matrix.c[1].y + body.armature;
-      body.d_inverse = chain::inverse(d_matrix);
+    const R armature = implicit ? hd * gamma + hd * hd * k : zero;
+    V3<R> p_torque = -(spinless * transverse) * dot(t, omega) * cross(omega, t) -
+                     cross(half, force);
+    V3<R> p_force = m * cross(omega, cross(omega, half)) - force;
+    const V2<R> hinge_torque = -k * widen(x.angles) -
+                               (implicit ? gamma + hd * k : gamma) * widen(x.rates);
+    if (i + 1 < n) {
+      a = a + child_a;
+      b = b + child_b;
+      c = c + child_c;
+      p_torque = p_torque + child_torque;
+      p_force = p_force + child_force;
     }
-    body.u = body.hinge_torque - V2<R>{dot(axes[0], body.p_torque), dot(axes[1], body.p_torque)};
+
+    const V3<R> axes[2] = {body.s_theta, body.s_phi};
+    for (int j = 0; j < 2; j++) {
+      body.u_angular[j] = a * axes[j];
+      body.u_linear[j] = chain::transpose_times(b, axes[j]);
+    }
+    M2<R> d_matrix{{{dot(axes[0], body.u_angular[0]), dot(axes[1], body.u_angular[0])},
+                    {dot(axes[0], body.u_angular[1]), dot(axes[1], body.u_angular[1])}}};
+    d_matrix.c[0].x = d_matrix.c[0].x + armature;
+    d_matrix.c[1].y = d_matrix.c[1].y + armature;
+    body.d_inverse = chain::inverse(d_matrix);
+    body.u = hinge_torque - V2<R>{dot(axes[0], p_torque), dot(axes[1], p_torque)};
     if (i == 0) {
       break;
     }
     const M2<R> &di = body.d_inverse;
-    Link<R> &parent = links[i - 1];
-    if (shape) {
-      /* I^a = I^A − U D⁻¹ Uᵀ, blockwise: U D⁻¹ Uᵀ = Σ_jk U_j (D⁻¹)_jk U_kᵀ
-       * = Σ_k (U D⁻¹)_k U_kᵀ. */
-      const V3<R> wa0 = di.c[0].x * body.u_angular[0] + di.c[0].y * body.u_angular[1];
-      const V3<R> wa1 = di.c[1].x * body.u_angular[0] + di.c[1].y * body.u_angular[1];
-      const V3<R> wl0 = di.c[0].x * body.u_linear[0] + di.c[0].y * body.u_linear[1];
-      const V3<R> wl1 = di.c[1].x * body.u_linear[0] + di.c[1].y * body.u_linear[1];
-      body.a = body.a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
-      body.b = body.b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
-      body.c = body.c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
-      /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c,
-       * c. (−br)ᵀ is added as the negated transpose: the same bits as glm's. */
-      const M3<R> rc = cross_times(body.arm, body.c);
-      const M3<R> br = times_cross(body.b, body.arm);
-            parent.a = parent.a + (body.a - br + transpose(-br) - times_cross(rc, body.arm));
-      parent.b = parent.b + (body.b + rc);
-      parent.c = parent.c + body.c;
-    }
-    const M3<R> &a = body.a, &b = body.b, &c = body.c;
+    /* I^a = I^A − U D⁻¹ Uᵀ, blockwise: U D⁻¹ Uᵀ = Σ_jk U_j (D⁻¹)_jk U_kᵀ = Σ_k (U D⁻¹)_k U_kᵀ. */
+    const V3<R> wa0 = di.c[0].x * body.u_angular[0] + di.c[0].y * body.u_angular[1];
+    const V3<R> wa1 = di.c[1].x * body.u_angular[0] + di.c[1].y * body.u_angular[1];
+    const V3<R> wl0 = di.c[0].x * body.u_linear[0] + di.c[0].y * body.u_linear[1];
+    const V3<R> wl1 = di.c[1].x * body.u_linear[0] + di.c[1].y * body.u_linear[1];
+    a = a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
+    b = b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
+    c = c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
+    /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c, c.
+     * (−br)ᵀ is added as the negated transpose: the same bits as glm's. */
+    const M3<R> rc = cross_times(arm, c);
+    const M3<R> br = times_cross(b, arm);
+    child_a = a - br + transpose(-br) - times_cross(rc, arm);
+    child_b = b + rc;
+    child_c = c;
     const V2<R> du = di * body.u;
-    const V3<R> pa_torque = body.p_torque + a * body.bias_angular + b * body.bias_linear +
+    const V3<R> pa_torque = p_torque + a * body.bias_angular + b * body.bias_linear +
                             du.x * body.u_angular[0] + du.y * body.u_angular[1];
-    const V3<R> pa_force = body.p_force + chain::transpose_times(b, body.bias_angular) +
+    const V3<R> pa_force = p_force + chain::transpose_times(b, body.bias_angular) +
                            c * body.bias_linear + du.x * body.u_linear[0] +
                            du.y * body.u_linear[1];
-    parent.p_torque = parent.p_torque + (pa_torque + cross(body.arm, pa_force));
-    parent.p_force = parent.p_force + pa_force;
+    child_torque = pa_torque + cross(arm, pa_force);
+    child_force = pa_force;
   }
 }
 
@@ -275,8 +266,7 @@ using Terms = StrandSolver::ArticulatedTerms;
 void recursion_lanes_baseline(Link<Lanes> *links, const Terms *terms, const size_t n,
                               const double *hd, const bool implicit, const double damping)
 {
-  fill_links(links, terms, n, hd, implicit, damping);
-  tip_to_root(links, n, true);
+  tip_to_root(links, terms, n, hd, implicit, damping);
   root_to_tip(links, n);
 }
 #if defined(__x86_64__)
@@ -285,8 +275,7 @@ __attribute__((target("avx2"))) void recursion_lanes_avx2(Link<Lanes> *links,
                                                            const double *hd, const bool implicit,
                                                            const double damping)
 {
-  fill_links(links, terms, n, hd, implicit, damping);
-  tip_to_root(links, n, true);
+  tip_to_root(links, terms, n, hd, implicit, damping);
   root_to_tip(links, n);
 }
 std::atomic<bool> use_avx2{cpu_has_avx2()};
@@ -500,6 +489,10 @@ void StrandSolver::mid_step_accelerations(const int64_t curve,
   }
 }
 
+/* GCC 12 reports the lanes filled one by one below (each zero-initialised first) as maybe
+ * uninitialised: a false positive of its vector element insertion. */
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Substep> steps,
                                        const Span<mat3> root_frames, const Span<vec3> winds,
                                        const Span<const vec2 *> mid_accelerations,
@@ -509,7 +502,7 @@ void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Su
   /* Pass 1, root to tip (Table 7.1, first loop), lane_width strands at once: geometry,
    * relative velocities, the rates at the middle of the step and the external force F on
    * each rod, every operation glm's on each lane (the rod's inertia and bias forces follow
-   * from these terms in double precision: fill_links). */
+   * from these terms in double precision: tip_to_root). */
   using chain::Floats;
   using chain::get;
   using chain::put;
@@ -525,9 +518,9 @@ void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Su
    * length h differs between lanes (a strand cutting its substep). */
   const Substep &shared = steps[0];
   const vec3 head_center = shared.pose.translation;
-  Floats h;
-  M3<Floats> frame;
-  V3<Floats> node, wind;
+  Floats h{};
+  M3<Floats> frame{};
+  V3<Floats> node{}, wind{};
   for (int lane = 0; lane < lane_width; lane++) {
     h[lane] = steps[lane].h;
     for (int j = 0; j < 3; j++) {
@@ -542,9 +535,9 @@ void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Su
   V3<Floats> arm{};
   Floats fastest_turn{}; /* rad/s, of a segment or across a hinge */
   for (size_t i = 0; i < n; i++) {
-    M3<Floats> rest;
-    Floats trig[4], d, k;
-    V2<Floats> rates, mid, angles;
+    M3<Floats> rest{};
+    Floats trig[4]{}, d{}, k{};
+    V2<Floats> rates{}, mid{}, angles{};
     for (int lane = 0; lane < lane_width; lane++) {
       const size_t p = first[lane] + i;
       for (int j = 0; j < 3; j++) {
@@ -616,6 +609,7 @@ void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Su
     r_fastest_turn[lane] = fastest_turn[lane];
   }
 }
+#pragma GCC diagnostic pop
 
 bool StrandSolver::articulated_commit(const int64_t curve, const Substep &substep,
                                       const mat3 &root_frame, const Span<vec2> step_accelerations)
