@@ -87,7 +87,6 @@ namespace hairdyn {
 using rvec2 = glm::dvec2;
 using rvec3 = glm::dvec3;
 using rmat2 = glm::dmat2;
-using rmat3 = glm::dmat3;
 
 /* What pass 1 hands the recursion for one body, in single precision, one lane per strand:
  * the recursion widens it and builds the rod's inertia and bias forces from it. */
@@ -326,7 +325,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
   const auto s_phi = [&](const size_t k) { return get(chain[k].s_phi, lane); };
   const auto arm = [&](const size_t k) { return get(chain[k].arm, lane); };
   /* d t, from the hinge point to the segment's tip */
-  const rvec3 reach = real(chain::get(terms[hit].d, lane) * chain::get(terms[hit].t, lane));
+  const rvec3 reach = real(get(terms[hit].d, lane) * get(terms[hit].t, lane));
   /* The tip's velocity: Ω_k = Ω_{k-1} + S_k q̇_k, v(P_k) = v(P_{k-1}) + Ω_{k-1} × r_k. */
   rvec3 omega(0.0), v(0.0);
   for (size_t k = 0; k <= hit; k++) {
@@ -504,10 +503,6 @@ void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Su
    * each rod, every operation glm's on each lane (the rod's inertia and bias forces follow
    * from these terms in double precision: tip_to_root). */
   using chain::Floats;
-  using chain::get;
-  using chain::put;
-  using chain::V2;
-  using chain::V3;
   size_t first[lane_width];
   for (int lane = 0; lane < lane_width; lane++) {
     first[lane] = size_t(curve_offsets_[size_t(curves[lane])]) + 1;
