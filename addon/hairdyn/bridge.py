@@ -55,7 +55,7 @@ class MeshData:
 
     name: str
     vertices: np.ndarray  # (V, 3) float32, object space
-    normals: np.ndarray  # (V, 3) float32, object space
+    blender_normals: np.ndarray  # (V, 3) float32, object space: Blender's (see normals())
     triangles: np.ndarray  # (T, 3) int32
     triangle_faces: np.ndarray  # (T,) int32, the polygon each triangle belongs to
     matrix_world: np.ndarray  # (4, 4) float64, row-major as Blender
@@ -63,11 +63,38 @@ class MeshData:
     def vertices_wo(self):
         return to_world(self.matrix_world, self.vertices)
 
+    def normals(self):
+        """(V, 3) float64 unit vertex normals in object space, the same bits in every run:
+        each triangle's unit normal weighted by its angle at the vertex (as Blender weights
+        its faces), summed in the triangles' order. Blender's own vertex normals are summed in
+        parallel and change in their last bits from run to run, and so did the simulation (a
+        strand's root normal one bit off, then chaos). A vertex in no triangle keeps Blender's
+        normal."""
+        v = self.vertices.astype(np.float64)
+        t = self.triangles
+        face = np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]])
+        face /= np.maximum(np.sqrt(np.einsum("ij,ij->i", face, face)), 1e-300)[:, None]
+        normals = np.zeros_like(v)
+        for corner in range(3):
+            to_next = v[t[:, (corner + 1) % 3]] - v[t[:, corner]]
+            to_previous = v[t[:, (corner + 2) % 3]] - v[t[:, corner]]
+            across = np.cross(to_next, to_previous)
+            angle = np.arctan2(np.sqrt(np.einsum("ij,ij->i", across, across)),
+                               np.einsum("ij,ij->i", to_next, to_previous))
+            np.add.at(normals, t[:, corner], angle[:, None] * face)  # in order: deterministic
+        lengths = np.sqrt(np.einsum("ij,ij->i", normals, normals))[:, None]
+        loose = lengths[:, 0] == 0.0
+        normals[loose] = self.blender_normals[loose]
+        lengths[loose] = 1.0
+        return normals / lengths
+
     def normals_wo(self):
-        """World-space unit normals (inverse-transpose, so non-uniform scale is right)."""
+        """World-space unit normals (inverse-transpose, so non-uniform scale is right), the
+        same bits in every run (normals(); no BLAS product, whose sums may be split
+        differently)."""
         normal_matrix = np.linalg.inv(self.matrix_world[:3, :3]).T
-        normals = self.normals.astype(np.float64) @ normal_matrix.T
-        lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+        normals = np.einsum("ij,kj->ik", self.normals(), normal_matrix)
+        lengths = np.sqrt(np.einsum("ij,ij->i", normals, normals))[:, None]
         return (normals / np.maximum(lengths, 1e-30)).astype(np.float32)
 
 
