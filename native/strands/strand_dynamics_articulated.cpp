@@ -571,11 +571,9 @@ void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Su
     for (int lane = 0; colliders_ != nullptr && lane < lane_width; lane++) {
       Contact contact;
       if (queried[lane] && colliders_->find_contact(get(tip, lane), contact)) {
-        /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
-        const float mass = density * d[lane];
         put(force, lane,
-            mass * reaction_constraint_force(get(force, lane) / mass, get(tip_velocity, lane),
-                                             contact, steps[lane].reaction));
+            contact_force(get(force, lane), d[lane], get(tip_velocity, lane), contact,
+                          steps[lane].reaction));
         r_counts[lane].contacts++;
       }
     }

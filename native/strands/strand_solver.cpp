@@ -331,30 +331,22 @@ vec3 StrandSolver::segment_force(const Substep &substep, const size_t i, const v
                                  const vec3 &tip_velocity, const vec3 &wind_wo,
                                  Counts &counts) const
 {
+  const float d = rest_lengths_[i];
+  const vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo, substep.h);
   Contact contact;
-  const bool inside = colliders_ != nullptr && colliders_->find_contact(tip, contact);
-  return segment_force(substep, i, center, center_velocity, inside ? &contact : nullptr,
-                       tip_velocity, wind_wo, counts);
+  if (colliders_ == nullptr || !colliders_->find_contact(tip, contact)) {
+    return force;
+  }
+  counts.contacts++;
+  return contact_force(force, d, tip_velocity, contact, substep.reaction);
 }
 
-vec3 StrandSolver::segment_force(const Substep &substep, const size_t i, const vec3 &center,
-                                 const vec3 &center_velocity, const Contact *contact,
-                                 const vec3 &tip_velocity, const vec3 &wind_wo,
-                                 Counts &counts) const
+vec3 StrandSolver::contact_force(const vec3 &force, const float d, const vec3 &tip_velocity,
+                                 const Contact &contact, const ReactionConstants &reaction) const
 {
-  const float d = rest_lengths_[i];
-  /* The force on this segment, lumped on its tip node (Kurihara 1993, eq. 6). This is the one
-   * place where a node's force is assembled: a collision response (eq. 12–15) filters it
-   * here, from the node's position and velocity, before it becomes a torque. */
-  vec3 force = substep.forces.on_segment(d, center, center_velocity, wind_wo, substep.h);
-  if (contact != nullptr) {
-    /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
-    const float mass = line_density() * d;
-    force = mass * reaction_constraint_force(force / mass, tip_velocity, *contact,
-                                             substep.reaction);
-    counts.contacts++;
-  }
-  return force;
+  /* Kurihara 1993, eq. 12–15, per unit mass: the segment's mass c d sits on its tip. */
+  const float mass = line_density() * d;
+  return mass * reaction_constraint_force(force / mass, tip_velocity, contact, reaction);
 }
 
 bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec3 tip,
@@ -403,13 +395,6 @@ vec3 StrandSolver::place_root(const int64_t curve, const Substep &substep, mat3 
   velocities_wo_[root] = node_velocity;
   root_frames_wo_[size_t(curve)] = r_frame;
   return wind_.velocity_at(node, substep.time);
-}
-
-bool StrandSolver::advance_strand(const int64_t curve, const Substep &substep, Counts &counts)
-{
-  uint8_t finite;
-  advance_strands(Span<int64_t>(&curve, 1), substep, counts, MutableSpan<uint8_t>(&finite, 1));
-  return finite;
 }
 
 void StrandSolver::advance_strands(const Span<int64_t> curves, const Substep &substep,

@@ -259,11 +259,9 @@ class StrandSolver {
   /* Strand `curve`'s root and root frame (r_frame) carried by the head to the end of the
    * substep; returns the wind at the root. */
   vec3 place_root(int64_t curve, const Substep &substep, mat3 &r_frame);
-  /* One substep of one strand: the root carried by the head, then the model's dynamics.
-   * Returns false when the strand diverged (it is then put back at rest). */
-  bool advance_strand(int64_t curve, const Substep &substep, Counts &counts);
-  /* advance_strand for each of `curves` (at most chain_lanes, one point count: a group of
-   * group_strands); r_finite[k] as it returns for curves[k]. */
+  /* One substep of each of `curves` (at most chain_lanes, one point count: a group of
+   * group_strands): the roots carried by the head, then the model's dynamics. r_finite[k] = 0
+   * where strand k diverged (it is then counted and put back at rest). */
   void advance_strands(Span<int64_t> curves, const Substep &substep, Counts &counts,
                        MutableSpan<uint8_t> r_finite);
   /* The stepped strands in groups of one point count, up to chain_lanes each (groups_). */
@@ -326,11 +324,11 @@ class StrandSolver {
   vec3 segment_force(const Substep &substep, size_t i, const vec3 &center,
                      const vec3 &center_velocity, const vec3 &tip, const vec3 &tip_velocity,
                      const vec3 &wind_wo, Counts &counts) const;
-  /* The same with the colliders' answer for the tip already known: `contact` is null where
-   * the tip is inside no collider (the articulated model's two stages share one query). */
-  vec3 segment_force(const Substep &substep, size_t i, const vec3 &center,
-                     const vec3 &center_velocity, const Contact *contact,
-                     const vec3 &tip_velocity, const vec3 &wind_wo, Counts &counts) const;
+  /* The external `force` on a segment of length d whose tip, moving at tip_velocity, is inside
+   * a collider at `contact`, filtered by the reaction constraint (Kurihara 1993, eq. 12–15):
+   * the one place both models take it. */
+  vec3 contact_force(const vec3 &force, float d, const vec3 &tip_velocity,
+                     const Contact &contact, const ReactionConstants &reaction) const;
   /* Ward & Lin 2003 §5.5: when the segment from `node` (chart `chart`, angles `angles`) ends
    * at `tip` deeper than the tolerance inside a collider, it turns about `node` onto the
    * surface and stops turning. Returns true when it moved; r_normal, if given, receives the
