@@ -1,13 +1,14 @@
 #pragma once
-/* The articulated chain's double-precision algebra over a lane type R: R = double for one
- * strand, or Lanes, lane_width doubles in one GCC/Clang vector, for lane_width strands of the
- * same number of segments stepped together (strand_dynamics_articulated.cpp).
+/* The articulated chain's algebra in lanes: Lanes, lane_width doubles in one GCC/Clang
+ * vector, and Floats, the same lanes in single precision, for lane_width strands of the same
+ * number of segments stepped together (strand_dynamics_articulated.cpp). V2, V3, M2 and M3
+ * take either as their lane type R.
  *
- * Every operation is written as glm evaluates it on dvec3, dmat3, dvec2 and dmat2 (the same
- * products, summed in the same order), each lane on its own, and none is fused: the core
- * builds as ISO C++, where GCC contracts no multiply-add. So a strand's step gives the same
- * bits in any lane of a vector as alone, whatever the instruction set the vector code was
- * compiled for (test StrandsArticulated.LanesGiveEachStrandItsOwnBits). */
+ * Every operation is written as glm evaluates it on vec3, mat3, dvec3, dmat3, dvec2 and dmat2
+ * (the same products, summed in the same order), each lane on its own, and none is fused: the
+ * core builds as ISO C++, where GCC contracts no multiply-add. So a strand's step gives the
+ * same bits in any lane of a vector as alone, whatever the instruction set the vector code
+ * was compiled for (test StrandsCollision.LanesGiveEachStrandItsOwnBits). */
 #include <cmath>
 
 #include "core/math.hh"
@@ -44,27 +45,7 @@ template<class R> struct M3 {
   V3<R> c[3];
 };
 
-/* One lane of R: its value, and writing it. */
-HAIRDYN_CHAIN_INLINE double get(const double x, int /*lane*/)
-{
-  return x;
-}
-HAIRDYN_CHAIN_INLINE double get(const Lanes &x, const int lane)
-{
-  return x[lane];
-}
-HAIRDYN_CHAIN_INLINE void put(double &x, int /*lane*/, const double value)
-{
-  x = value;
-}
-HAIRDYN_CHAIN_INLINE void put(Lanes &x, const int lane, const double value)
-{
-  x[lane] = value;
-}
-HAIRDYN_CHAIN_INLINE void put(Floats &x, const int lane, const float value)
-{
-  x[lane] = value;
-}
+/* One lane: writing it (pass 1's single-precision lanes) and reading it. */
 HAIRDYN_CHAIN_INLINE void put(V2<Floats> &v, const int lane, const glm::vec2 &value)
 {
   v.x[lane] = value.x;
@@ -76,6 +57,31 @@ HAIRDYN_CHAIN_INLINE void put(V3<Floats> &v, const int lane, const glm::vec3 &va
   v.y[lane] = value.y;
   v.z[lane] = value.z;
 }
+HAIRDYN_CHAIN_INLINE float get(const Floats &x, const int lane)
+{
+  return x[lane];
+}
+HAIRDYN_CHAIN_INLINE glm::vec3 get(const V3<Floats> &v, const int lane)
+{
+  return glm::vec3(v.x[lane], v.y[lane], v.z[lane]);
+}
+HAIRDYN_CHAIN_INLINE double get(const Lanes &x, const int lane)
+{
+  return x[lane];
+}
+HAIRDYN_CHAIN_INLINE glm::dvec2 get(const V2<Lanes> &v, const int lane)
+{
+  return glm::dvec2(get(v.x, lane), get(v.y, lane));
+}
+HAIRDYN_CHAIN_INLINE glm::dvec3 get(const V3<Lanes> &v, const int lane)
+{
+  return glm::dvec3(get(v.x, lane), get(v.y, lane), get(v.z, lane));
+}
+HAIRDYN_CHAIN_INLINE glm::dmat2 get(const M2<Lanes> &m, const int lane)
+{
+  return glm::dmat2(get(m.c[0], lane), get(m.c[1], lane));
+}
+
 /* Single-precision lanes with one value for every lane (a glm scalar, vector or matrix):
  * the same operations as glm's on each lane. */
 HAIRDYN_CHAIN_INLINE V3<Floats> operator*(const float s, const V3<Floats> &v)
@@ -85,14 +91,6 @@ HAIRDYN_CHAIN_INLINE V3<Floats> operator*(const float s, const V3<Floats> &v)
 HAIRDYN_CHAIN_INLINE V3<Floats> operator-(const V3<Floats> &a, const glm::vec3 &b)
 {
   return { a.x - b.x, a.y - b.y, a.z - b.z };
-}
-HAIRDYN_CHAIN_INLINE float get(const Floats &x, const int lane)
-{
-  return x[lane];
-}
-HAIRDYN_CHAIN_INLINE glm::vec3 get(const V3<Floats> &v, const int lane)
-{
-  return glm::vec3(v.x[lane], v.y[lane], v.z[lane]);
 }
 HAIRDYN_CHAIN_INLINE V3<Floats> operator+(const glm::vec3 &a, const V3<Floats> &b)
 {
@@ -136,36 +134,6 @@ HAIRDYN_CHAIN_INLINE V3<Lanes> widen(const V3<Floats> &v)
 {
   return { widen(v.x), widen(v.y), widen(v.z) };
 }
-template<class R> HAIRDYN_CHAIN_INLINE glm::dvec2 get(const V2<R> &v, const int lane)
-{
-  return glm::dvec2(get(v.x, lane), get(v.y, lane));
-}
-template<class R> HAIRDYN_CHAIN_INLINE glm::dvec3 get(const V3<R> &v, const int lane)
-{
-  return glm::dvec3(get(v.x, lane), get(v.y, lane), get(v.z, lane));
-}
-template<class R> HAIRDYN_CHAIN_INLINE glm::dmat2 get(const M2<R> &m, const int lane)
-{
-  return glm::dmat2(get(m.c[0], lane), get(m.c[1], lane));
-}
-template<class R> HAIRDYN_CHAIN_INLINE void put(V2<R> &v, const int lane, const glm::dvec2 &value)
-{
-  put(v.x, lane, value.x);
-  put(v.y, lane, value.y);
-}
-template<class R> HAIRDYN_CHAIN_INLINE void put(V3<R> &v, const int lane, const glm::dvec3 &value)
-{
-  put(v.x, lane, value.x);
-  put(v.y, lane, value.y);
-  put(v.z, lane, value.z);
-}
-template<class R> HAIRDYN_CHAIN_INLINE void put(M3<R> &m, const int lane, const glm::dmat3 &value)
-{
-  for (int j = 0; j < 3; j++) {
-    put(m.c[j], lane, value[j]);
-  }
-}
-
 template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator+(const V2<R> &a, const V2<R> &b)
 {
   return { a.x + b.x, a.y + b.y };

@@ -55,11 +55,11 @@
  * whipping chain energy until it ran away.
  *
  * Strands of one point count step four at a time (StrandSolver::group_strands): pass 1 (the
- * shape, contacts and forces, in single precision) and the commit with its projection run
- * strand by strand, and passes 2 and 3 for the four in one vector of doubles
- * (strands/chain_lanes.hh), every operation as glm evaluates it, so a strand keeps the bits
- * it has alone (test LanesGiveEachStrandItsOwnBits). Each strand predicts and cuts its steps
- * on its own; a lane without a strand in a stage repeats another's, its result dropped. */
+ * shape and forces) in vectors of four floats, the tips' contacts queried strand by strand;
+ * passes 2 and 3 in vectors of four doubles (strands/chain_lanes.hh), every operation as glm
+ * evaluates it, so a strand keeps the bits it has alone (test LanesGiveEachStrandItsOwnBits);
+ * the commit with its projection strand by strand. Each strand predicts and cuts its steps on
+ * its own; a lane without a strand in a stage repeats another's, its result dropped. */
 #include <algorithm>
 #include <atomic>
 #include <cassert>
