@@ -21,30 +21,26 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
                                           std::min(lod_params.finest_level, hierarchy_.max_depth());
   coarsest_ = std::min(lod_params.coarsest_level, finest_);
 
-  /* One strand solver per depth over the skeletons of that depth, in node order. */
+  /* One strand solver over every node's skeleton, curve i being node i; set_stepped picks the
+   * ones a frame advances. */
   const int32_t n = hierarchy_.skeleton_points_num();
   const int64_t nodes = hierarchy_.nodes_num();
-  level_curves_.resize(size_t(nodes));
-  for (int32_t depth = 0; depth <= hierarchy_.max_depth(); depth++) {
-    std::vector<int32_t> offsets{0};
-    std::vector<vec3> rest;
-    std::vector<vec3> normals;
-    for (int64_t node = 0; node < nodes; node++) {
-      if (hierarchy_.depth(node) != depth) {
-        continue;
-      }
-      level_curves_[size_t(node)] = int64_t(offsets.size()) - 1;
-      offsets.push_back(offsets.back() + n);
-      const Span<vec3> skeleton = hierarchy_.rest_skeleton(node);
-      rest.insert(rest.end(), skeleton.begin(), skeleton.end());
-      /* Every skeleton of a tree measures its angles from the same root normal, so equal
-       * angles mean equal turns on parent and child and the state can pass between them as
-       * it is (§6.2, §6.3). The normal only orients the angles' chart. */
-      normals.push_back(hierarchy_.root_normal(hierarchy_.top_node(node)));
-    }
-    level_solvers_.emplace_back(offsets, rest, head_to_world_rest, normals, strand_params, wind);
-    level_stepped_.emplace_back(offsets.size() - 1, uint8_t(0));
+  std::vector<int32_t> offsets(size_t(nodes) + 1);
+  std::vector<vec3> skeletons;
+  std::vector<vec3> normals;
+  skeletons.reserve(size_t(nodes * n));
+  for (int64_t node = 0; node < nodes; node++) {
+    offsets[size_t(node) + 1] = int32_t((node + 1) * n);
+    const Span<vec3> skeleton = hierarchy_.rest_skeleton(node);
+    skeletons.insert(skeletons.end(), skeleton.begin(), skeleton.end());
+    /* Every skeleton of a tree measures its angles from the same root normal, so equal angles
+     * mean equal turns on parent and child and the state can pass between them as it is
+     * (§6.2, §6.3). The normal only orients the angles' chart. */
+    normals.push_back(hierarchy_.root_normal(hierarchy_.top_node(node)));
   }
+  solver_ = std::make_unique<StrandSolver>(offsets, skeletons, head_to_world_rest, normals,
+                                           strand_params, wind);
+  stepped_.assign(size_t(nodes), 0);
 
   active_.assign(size_t(nodes), 0);
   shown_.assign(size_t(nodes), 0);
@@ -71,9 +67,7 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
 void LodSolver::set_colliders(const ColliderSet *colliders, const CollisionParams &params)
 {
   colliders_ = colliders;
-  for (StrandSolver &solver : level_solvers_) {
-    solver.set_colliders(colliders, params);
-  }
+  solver_->set_colliders(colliders, params);
 }
 
 void LodSolver::set_active(const int32_t node, const bool active)
@@ -88,9 +82,7 @@ void LodSolver::set_active(const int32_t node, const bool active)
 
 void LodSolver::reset(const mat4 &head_to_world)
 {
-  for (StrandSolver &solver : level_solvers_) {
-    solver.reset(head_to_world);
-  }
+  solver_->reset(head_to_world);
   head_rotation_ = HeadPose::from_matrix(head_to_world).rotation_matrix() *
                    glm::transpose(rest_pose_.rotation_matrix());
   std::fill(active_.begin(), active_.end(), 0);
@@ -111,8 +103,7 @@ void LodSolver::reset(const mat4 &head_to_world)
 Span<vec3> LodSolver::skeleton(const int64_t node) const
 {
   const int32_t n = hierarchy_.skeleton_points_num();
-  return level_solvers_[size_t(hierarchy_.depth(node))].positions().slice(
-      level_curves_[size_t(node)] * n, n);
+  return solver_->positions().slice(node * n, n);
 }
 
 Span<mat3> LodSolver::frames(const int64_t node) const
@@ -124,15 +115,13 @@ Span<mat3> LodSolver::frames(const int64_t node) const
 Span<vec2> LodSolver::angles(const int64_t node) const
 {
   const int32_t n = hierarchy_.skeleton_points_num();
-  return level_solvers_[size_t(hierarchy_.depth(node))].angles().slice(
-      level_curves_[size_t(node)] * n, n);
+  return solver_->angles().slice(node * n, n);
 }
 
 Span<vec2> LodSolver::angular_velocities(const int64_t node) const
 {
   const int32_t n = hierarchy_.skeleton_points_num();
-  return level_solvers_[size_t(hierarchy_.depth(node))].angular_velocities().slice(
-      level_curves_[size_t(node)] * n, n);
+  return solver_->angular_velocities().slice(node * n, n);
 }
 
 void LodSolver::update_frames()
@@ -160,8 +149,7 @@ void LodSolver::take_state(const int32_t node, const Span<vec2> angles, const Sp
     same = old_angles[k] == angles[k] && old_rates[k] == rates[k];
   }
   if (!same) {
-    level_solvers_[size_t(hierarchy_.depth(node))].set_curve_state(level_curves_[size_t(node)],
-                                                                   angles, rates);
+    solver_->set_curve_state(node, angles, rates);
     current_[size_t(node)] = 1;
   }
 }
@@ -261,9 +249,7 @@ void LodSolver::select(const LodCamera &camera)
         continue;
       }
       const Span<vec3> points = skeleton(node);
-      const Span<vec3> velocities = level_solvers_[size_t(hierarchy_.depth(node))]
-                                        .velocities()
-                                        .slice(level_curves_[size_t(node)] * n, n);
+      const Span<vec3> velocities = solver_->velocities().slice(node * n, n);
       vec3 centre(0.0f);
       float speed = 0.0f;
       for (int32_t k = 0; k < n; k++) {
@@ -449,16 +435,13 @@ void LodSolver::step(const float frame_dt, const mat4 &head_to_world, const mat4
   }
   /* Only the active skeletons, and on a switch the ones that drove strands at the last frame
    * (place_strands measures the jump between the two at this frame), are stepped; each
-   * level's solver runs its strands in parallel. */
+   * solver runs them in parallel. */
   for (int64_t node = 0; node < hierarchy_.nodes_num(); node++) {
-    const uint8_t stepped = active_[size_t(node)] || shown_[size_t(node)];
-    level_stepped_[size_t(hierarchy_.depth(node))][size_t(level_curves_[size_t(node)])] = stepped;
-    current_[size_t(node)] = stepped;
+    stepped_[size_t(node)] = active_[size_t(node)] || shown_[size_t(node)];
+    current_[size_t(node)] = stepped_[size_t(node)];
   }
-  for (size_t depth = 0; depth < level_solvers_.size(); depth++) {
-    level_solvers_[depth].set_stepped(level_stepped_[depth]);
-    level_solvers_[depth].step(frame_dt, head_to_world);
-  }
+  solver_->set_stepped(stepped_);
+  solver_->step(frame_dt, head_to_world);
   head_rotation_ = HeadPose::from_matrix(head_to_world).rotation_matrix() *
                    glm::transpose(rest_pose_.rotation_matrix());
   update_frames();
@@ -466,29 +449,11 @@ void LodSolver::step(const float frame_dt, const mat4 &head_to_world, const mat4
   shown_ = active_;
 }
 
-int64_t LodSolver::stepped_num() const
-{
-  int64_t count = 0;
-  for (const StrandSolver &solver : level_solvers_) {
-    count += solver.stepped_num();
-  }
-  return count;
-}
-
-int64_t LodSolver::contacts_num() const
-{
-  int64_t count = 0;
-  for (const StrandSolver &solver : level_solvers_) {
-    count += solver.contacts_num();
-  }
-  return count;
-}
-
 std::vector<int64_t> LodSolver::stepped_per_level() const
 {
-  std::vector<int64_t> counts;
-  for (const StrandSolver &solver : level_solvers_) {
-    counts.push_back(solver.stepped_num());
+  std::vector<int64_t> counts(size_t(hierarchy_.max_depth() + 1), 0);
+  for (int64_t node = 0; node < hierarchy_.nodes_num(); node++) {
+    counts[size_t(hierarchy_.depth(node))] += stepped_[size_t(node)];
   }
   return counts;
 }

@@ -4,8 +4,8 @@
  * every frame by visibility, distance and velocity (§6.1), split (§6.2) and merged (§6.3) one
  * level per frame, and every artist strand placed on the skeleton that drives it.
  *
- * Dynamics. Each level (depth) of the hierarchy is one StrandSolver over all skeletons of
- * that depth, and each frame steps only the skeletons of the current cut (the active ones)
+ * Dynamics. One StrandSolver holds every node's skeleton (curve i is node i), and each frame
+ * steps only the skeletons of the current cut (the active ones)
  * and, on the frame of a switch, the ones that drove strands at the last frame (so the jump
  * between the old and the new skeleton's placement is measured at the same instant):
  * StrandSolver::set_stepped. The cost of a frame is that of the active skeletons (Ward's
@@ -28,6 +28,7 @@
  * between the old and the new skeleton's placement is kept as a residual that a spring pulls
  * to zero with time constant transition_time (§6.3: "a spring force is used to subtly pull
  * the children into place"). */
+#include <memory>
 #include <vector>
 
 #include "collision/collider.hh"
@@ -94,20 +95,19 @@ class LodSolver {
    * when it was last stepped or placed (frames: last stepped). */
   Span<vec3> skeleton(int64_t node) const;
   Span<mat3> frames(int64_t node) const;
-  /* The strand solver of one depth; node `node` is its curve level_curve(node). */
-  const StrandSolver &level_solver(int32_t depth) const { return level_solvers_[size_t(depth)]; }
-  int64_t level_curve(int64_t node) const { return level_curves_[size_t(node)]; }
+  /* The strand solver of every skeleton: node `node` is its curve `node`. */
+  const StrandSolver &solver() const { return *solver_; }
   /* A node's segment angles and rates (points 1 .. n-1 of its curve; slot 0 is the root). */
   Span<vec2> angles(int64_t node) const;
   Span<vec2> angular_velocities(int64_t node) const;
 
   /* Skeletons the last step advanced (the active ones, plus those of the last frame that a
    * switch made inactive), and per level. */
-  int64_t stepped_num() const;
+  int64_t stepped_num() const { return solver_->stepped_num(); }
   std::vector<int64_t> stepped_per_level() const;
   /* Skeleton nodes inside a collider during the last step (the reaction constraint, Kurihara
-   * 1993 eq. 12–15), over every substep: StrandSolver::contacts_num of each level. */
-  int64_t contacts_num() const;
+   * 1993 eq. 12–15), over every substep: StrandSolver::contacts_num. */
+  int64_t contacts_num() const { return solver_->contacts_num(); }
 
   /* The transitions step() makes, for tests: split an active node into its children (§6.2);
    * merge the active children of `parent` into it (§6.3). The output is updated at the next
@@ -138,11 +138,9 @@ class LodSolver {
   mat3 head_rotation_{1.0f}; /* since rest, at the end of the last step */
   const ColliderSet *colliders_ = nullptr;
 
-  std::vector<StrandSolver> level_solvers_;
-  std::vector<int64_t> level_curves_;
-
-  /* Per depth: per curve of its solver, stepped by the next step. */
-  std::vector<std::vector<uint8_t>> level_stepped_;
+  std::unique_ptr<StrandSolver> solver_;
+  /* Per node: stepped by the next step. */
+  std::vector<uint8_t> stepped_;
 
   /* Per node. shown_: active at the end of the last step (drove strands at the last
    * placement); current_: its solver nodes agree with its state and the head's last pose
