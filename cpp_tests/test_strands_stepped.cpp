@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "collision/hair_hair_ward2003.hh"
 #include "groom/groom.hh"
 #include "lod_scenes.hh"
 #include "strands/strand_solver.hh"
@@ -176,4 +177,71 @@ TEST(StrandsStepped, AStateTakenAfterALongHoldResumesWithoutAJump)
     EXPECT_GT(motion, 1e-3f);
     EXPECT_LT(drift, 0.02f * motion) << "model " << int(model);
   }
+}
+
+/* The substep passes see only the stepped strands (and of those only the ones `in_passes`
+ * marks): with hair–hair collision on, the even strands of a groom, stepped while the odd ones
+ * are held, take the same bits as a solver of the even strands alone; narrowed to every other
+ * even strand, the pass sees those only. */
+TEST(StrandsStepped, PassesSeeOnlyTheirStrands)
+{
+  const CapGroom groom(40, 10);
+  SweptSphereParams params;
+  params.hair_hair = true;
+  params.thickness = 0.004f; /* thick enough that the strands meet */
+  std::vector<uint8_t> even(40, 0), every_fourth(40, 0);
+  CapGroom alone(0, 10);
+  for (int64_t s = 0; s < 40; s += 2) {
+    even[size_t(s)] = 1;
+    every_fourth[size_t(s)] = s % 4 == 0;
+    const IndexRange points = curve_points(Span<int32_t>(groom.offsets), s);
+    alone.positions.insert(alone.positions.end(), groom.positions.begin() + points.start,
+                           groom.positions.begin() + points.one_after_last());
+    alone.offsets.push_back(int32_t(alone.positions.size()));
+    alone.normals.push_back(groom.normals[size_t(s)]);
+  }
+  const auto colliders = head_colliders();
+  StrandSolver masked(groom.offsets, groom.positions, mat4(1.0f), groom.normals, StrandParams());
+  StrandSolver single(alone.offsets, alone.positions, mat4(1.0f), alone.normals, StrandParams());
+  HairHairPass masked_pass(params), single_pass(params);
+  for (StrandSolver *solver : {&masked, &single}) {
+    solver->set_colliders(colliders.get(), CollisionParams());
+  }
+  masked.add_pass(&masked_pass);
+  single.add_pass(&single_pass);
+  masked.set_stepped(even);
+  int64_t pairs = 0;
+  for (int frame = 0; frame < 24; frame++) {
+    masked.step(frame_dt, turning_head(frame));
+    single.step(frame_dt, turning_head(frame));
+    pairs += single_pass.stats().pairs_num;
+    ASSERT_EQ(masked_pass.stats().pairs_num, single_pass.stats().pairs_num) << "frame " << frame;
+    single_pass.reset_stats();
+    masked_pass.reset_stats();
+  }
+  EXPECT_GT(pairs, 0) << "the strands must meet";
+  for (int64_t s = 0; s < 20; s++) {
+    const IndexRange mine = curve_points(Span<int32_t>(groom.offsets), 2 * s);
+    const IndexRange theirs = curve_points(Span<int32_t>(alone.offsets), s);
+    for (int64_t i = 0; i < mine.size; i++) {
+      ASSERT_EQ(masked.positions()[mine.start + i], single.positions()[theirs.start + i])
+          << "strand " << 2 * s << ", point " << i;
+    }
+  }
+  /* What a pass sees: every stepped strand, or those in_passes marks. */
+  struct SeenPass : public SubstepPass {
+    const char *name() const override { return "seen"; }
+    void apply(const SubstepState &state) override { curves = state.curve_offsets.size() - 1; }
+    int64_t curves = 0;
+  } seen;
+  masked.clear_passes();
+  masked.add_pass(&seen);
+  masked.step(frame_dt, turning_head(24));
+  EXPECT_EQ(seen.curves, 20);
+  masked.set_stepped(even, every_fourth);
+  masked.step(frame_dt, turning_head(25));
+  EXPECT_EQ(seen.curves, 10);
+  masked.set_stepped({});
+  masked.step(frame_dt, turning_head(26));
+  EXPECT_EQ(seen.curves, 40);
 }

@@ -119,6 +119,30 @@ void bind_lod(py::module_ &m)
           py::arg("colliders"), py::arg("params") = CollisionParams(), py::keep_alive<1, 2>(),
           "Collide every skeleton with a ColliderSet (kept alive by the solver) and let it hide "
           "hair from the camera; None for neither.")
+      .def(
+          "set_occluders",
+          [](LodSolver &self, const ColliderSet *occluders) { self.set_occluders(occluders); },
+          py::arg("occluders"), py::keep_alive<1, 2>(),
+          "Let a ColliderSet (kept alive by the solver) hide hair from the camera without the "
+          "skeletons colliding with it by the maps; None for none.")
+      .def(
+          "add_pass",
+          [](LodSolver &self, SubstepPass *pass, const float strand_radius) {
+            if (pass == nullptr) {
+              fail("add_pass needs a SubstepPass, not None");
+            }
+            if (!(strand_radius >= 0.0f) || !std::isfinite(strand_radius)) {
+              fail("strand_radius must be a finite length of 0 m or more");
+            }
+            self.add_pass(pass, strand_radius);
+          },
+          py::arg("substep_pass"), py::arg("strand_radius"), py::keep_alive<1, 2>(),
+          "Run substep_pass after every substep over the active skeletons, each the swept-sphere "
+          "volume of its group (Ward & Lin 2003 section 5.2: a strip a rectangle swept sphere, a "
+          "cluster or strand group a line swept sphere, strand_radius in m plus the group's "
+          "spread); kept alive by the solver.")
+      .def("pass_ms", &LodSolver::pass_ms, py::arg("name"),
+           "Milliseconds the pass named `name` took during the last step (0: no such pass).")
       .def_property_readonly(
           "positions",
           [](py::object self) { return float3_view(self.cast<LodSolver &>().positions(), self); },

@@ -9,6 +9,7 @@
 #  include <emmintrin.h>
 #endif
 
+#include "core/head_motion.hh"
 #include "core/parallel.hh"
 
 namespace hairdyn {
@@ -237,7 +238,7 @@ ivec3 cell_of(const vec3 &p, const vec3 &lo, const glm::dvec3 &inv_cell, const i
  * segment. */
 bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
                 const StartPositions &start, const Span<float> radii, const float default_radius,
-                SegmentGridScratch &g)
+                const Span<vec3> half_widths, SegmentGridScratch &g)
 {
   const int64_t curves_num = curve_offsets.size() - 1;
   const int64_t points_num = positions.size();
@@ -271,7 +272,12 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
           for (int32_t p = first; p < last; p++) {
             const size_t k = size_t(p - c);
             g.segment_curve[k] = int32_t(c);
-            const float r = radii.is_empty() ? default_radius : 0.5f * (radii[p] + radii[p + 1]);
+            /* A strip segment's rectangle reaches its half width from the segment. */
+            const float r = (radii.is_empty() ? default_radius :
+                                                0.5f * (radii[p] + radii[p + 1])) +
+                            (half_widths.is_empty() ?
+                                 0.0f :
+                                 glm::length(0.5f * (half_widths[p] + half_widths[p + 1])));
             const vec3 a = positions[p], e = positions[p + 1];
             vec3 lo = glm::min(a, e), hi = glm::max(a, e);
             float sweep = 0.0f;
@@ -429,6 +435,7 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   g.entry_point.resize(entries_num);
   g.entry_curve.resize(entries_num);
   g.entry_sweep.resize(entries_num);
+  g.entry_strip.resize(half_widths.is_empty() ? 0 : entries_num);
   parallel_for(int64_t(entries_num), 4096, [&](const IndexRange range) {
     for (int64_t e = range.start; e < range.one_after_last(); e++) {
       const size_t k = size_t(g.entry_segment[size_t(e)]);
@@ -451,6 +458,9 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
       g.entry_curve[size_t(e)] = g.segment_curve[k];
       g.entry_point[size_t(e)] = int32_t(k) + g.segment_curve[k];
       g.entry_sweep[size_t(e)] = g.segment_sweep[k];
+      if (!half_widths.is_empty()) {
+        g.entry_strip[size_t(e)] = half_widths[p] != vec3(0.0f) || half_widths[p + 1] != vec3(0.0f);
+      }
     }
   });
   return true;
@@ -508,10 +518,162 @@ struct PairContext {
   StartPositions start;
   Span<float> radii;
   float default_radius = 0.0f;
+  Span<vec3> half_widths; /* per point, world; empty: no strips */
   Span<vec3> v;
   const SweptSphereParams *params = nullptr;
   float sin_parallel = 0.0f;
 };
+
+/* The contact of segments pi < pj whose cores are `core` apart (its s and t: the closest
+ * points' parameters along them), and §5.3's response when ctx has parameters: near-parallel
+ * pairs take the average of their velocities, the others move apart along the unit vector n
+ * (first to second) by `depth` in all, half each. */
+void respond(const PairContext &ctx, const int32_t pi, const int32_t pj, const CoreDistance &core,
+             const float radii_sum, const bool parallel, const bool crossed, const vec3 &n,
+             const float depth, SegmentContact &r_c)
+{
+  r_c.first = pi;
+  r_c.second = pj;
+  r_c.core = core;
+  r_c.crossed = crossed;
+  r_c.parallel = parallel;
+  r_c.move = r_c.dv_first = r_c.dv_second = vec3(0.0f);
+  r_c.overlap = core.distance - radii_sum;
+  if (ctx.params == nullptr) {
+    return;
+  }
+  const Span<vec3> v = ctx.v;
+  const float s = core.s, t = core.t;
+  const vec3 va = glm::mix(v[pi], v[pi + 1], s), vb = glm::mix(v[pj], v[pj + 1], t);
+  if (parallel) {
+    /* §5.3: near parallel, both take the average of their velocities. */
+    const vec3 average = 0.5f * (va + vb);
+    r_c.dv_first = average - va;
+    r_c.dv_second = average - vb;
+    return;
+  }
+  if (crossed) {
+    r_c.overlap = -depth;
+  }
+  r_c.move = (0.5f * ctx.params->push_strength * depth) * n;
+  /* The approaching normal velocity is removed (inelastic, like the push), so that the next
+   * substep does not undo the push. */
+  const float approach = glm::dot(vb - va, n);
+  if (approach < 0.0f) {
+    r_c.dv_first = (0.5f * ctx.params->push_strength * approach) * n;
+    r_c.dv_second = -r_c.dv_first;
+  }
+}
+
+/* Segment p's half width across the strip it belongs to (zero: not a strip). */
+inline vec3 segment_half_width(const PairContext &ctx, const int32_t p)
+{
+  return ctx.half_widths.is_empty() ? vec3(0.0f) :
+                                      0.5f * (ctx.half_widths[p] + ctx.half_widths[p + 1]);
+}
+
+/* Whether segments pi < pj of one strand can meet only by the strand folding back: the
+ * strand between them (pj − pi − 1 segments, about as long as the two) is longer than their
+ * radii and half widths together. A thick group's skeleton (level of detail) is not pushed
+ * apart by its own straight run; a thin strand's segments are always far enough apart. */
+bool folded_back(const PairContext &ctx, const int32_t pi, const int32_t pj)
+{
+  const auto reach = [&](const int32_t p) {
+    return (ctx.radii.is_empty() ? ctx.default_radius :
+                                   0.5f * (ctx.radii[p] + ctx.radii[p + 1])) +
+           glm::length(segment_half_width(ctx, p));
+  };
+  const float between = float(pj - pi - 1) * 0.5f *
+                        (glm::length(ctx.x[pi + 1] - ctx.x[pi]) +
+                         glm::length(ctx.x[pj + 1] - ctx.x[pj]));
+  return between > reach(pi) + reach(pj);
+}
+
+/* test_pair for a pair of which at least one is a strip segment, a rectangle swept sphere
+ * (§5.2): the exact distance between the cores (segment–rectangle or rectangle–rectangle) and
+ * the same response, at the closest points' places along the two segments. Continuous like the
+ * line swept spheres' test, by sampling instead of a root search: the sweep from the substep's
+ * start is cut into steps in which the two move less than the sum of their radii relative to
+ * each other (at most 64), so a thin strip cannot pass through another between samples; a
+ * pair that came within reach during the substep is pushed back to the side it came from. */
+bool test_strip_pair(const PairContext &ctx, const int32_t pi, const int32_t pj,
+                     const vec3 &half_i, const vec3 &half_j, const float sweeps,
+                     SegmentContact &r_c)
+{
+  const auto radius = [&](const int32_t p) {
+    return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
+  };
+  const float radii_sum = radius(pi) + radius(pj);
+  const bool strip_i = half_i != vec3(0.0f), strip_j = half_j != vec3(0.0f);
+  /* The cores' closest points with the nodes at (a0, a1), (b0, b1). */
+  const auto cores = [&](const vec3 &a0, const vec3 &a1, const vec3 &b0, const vec3 &b1) {
+    const auto rect = [](const vec3 &p0, const vec3 &p1, const vec3 &half) {
+      return RectSS::from_segment(p0, p1, half, 2.0f * glm::length(half), 0.0f);
+    };
+    if (strip_i && strip_j) {
+      return rectangle_rectangle_distance(rect(a0, a1, half_i), rect(b0, b1, half_j));
+    }
+    if (strip_i) {
+      CoreDistance core = segment_rectangle_distance(b0, b1, rect(a0, a1, half_i));
+      std::swap(core.point_a, core.point_b);
+      return core;
+    }
+    return segment_rectangle_distance(a0, a1, rect(b0, b1, half_j));
+  };
+  const Span<vec3> x = ctx.x;
+  const vec3 a0 = x[pi], a1 = x[pi + 1], b0 = x[pj], b1 = x[pj + 1];
+  CoreDistance core = cores(a0, a1, b0, b1);
+  /* The side the pair came from, when it came within reach during the substep. */
+  bool crossed = false;
+  vec3 n(0.0f);
+  if (ctx.start.sweeps() && sweeps > 0.0f && radii_sum > 0.0f) {
+    const vec3 A0 = ctx.start[pi], A1 = ctx.start[pi + 1];
+    const vec3 B0 = ctx.start[pj], B1 = ctx.start[pj + 1];
+    const int samples = int(std::min(64.0f, std::ceil(sweeps / radii_sum)));
+    CoreDistance last = cores(A0, A1, B0, B1);
+    for (int k = 1; k <= samples && last.distance >= radii_sum; k++) {
+      const float tau = float(k) / float(samples);
+      const CoreDistance now = k == samples ?
+                                   core :
+                                   cores(glm::mix(A0, a0, tau), glm::mix(A1, a1, tau),
+                                         glm::mix(B0, b0, tau), glm::mix(B1, b1, tau));
+      if (now.distance < radii_sum) {
+        n = (last.point_b - last.point_a) / last.distance;
+        /* Still within reach of that side at the end: pushed back to it. */
+        crossed = radii_sum - glm::dot(core.point_b - core.point_a, n) > 0.0f;
+      }
+      last = now;
+    }
+  }
+  if (!crossed && core.distance >= radii_sum) {
+    return false;
+  }
+  core.s = closest_segment_parameter(core.point_a, a0, a1);
+  core.t = closest_segment_parameter(core.point_b, b0, b1);
+  const vec3 da = a1 - a0, db = b1 - b0;
+  const vec3 n1 = glm::cross(da, db);
+  const bool parallel = !crossed &&
+                        glm::dot(n1, n1) <= ctx.sin_parallel * ctx.sin_parallel *
+                                                glm::dot(da, da) * glm::dot(db, db);
+  float depth = radii_sum - core.distance;
+  if (crossed) {
+    depth = radii_sum - glm::dot(core.point_b - core.point_a, n);
+  }
+  else if (core.distance > 1e-4f * radii_sum) {
+    n = (core.point_b - core.point_a) / core.distance;
+  }
+  else {
+    /* Cores that meet (and met at the start): apart along the lines' common normal, toward
+     * the side where b's middle lies (or from a's middle to b's). */
+    const vec3 apart = 0.5f * (b0 + b1 - a0 - a1);
+    const float nn = glm::dot(n1, n1);
+    n = nn > 0.0f ? (glm::dot(apart, n1) >= 0.0f ? 1.0f : -1.0f) * n1 / std::sqrt(nn) : apart;
+    const float length = glm::length(n);
+    n = length > 0.0f ? n / length : vec3(0.0f);
+  }
+  respond(ctx, pi, pj, core, radii_sum, parallel, crossed, n, depth, r_c);
+  return true;
+}
 
 /* The narrow phase of one pair of segments (first points pi < pj): true, with the contact
  * and its §5.3 response, when their swept spheres overlap at the end of the substep or passed
@@ -520,6 +682,12 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
                SegmentContact &r_c, const SegmentGridScratch::Segment *copy_i = nullptr,
                const SegmentGridScratch::Segment *copy_j = nullptr)
 {
+  if (!ctx.half_widths.is_empty()) {
+    const vec3 half_i = segment_half_width(ctx, pi), half_j = segment_half_width(ctx, pj);
+    if (half_i != vec3(0.0f) || half_j != vec3(0.0f)) {
+      return test_strip_pair(ctx, pi, pj, half_i, half_j, sweeps, r_c);
+    }
+  }
   const Span<vec3> x = ctx.x;
   const auto radius = [&](const int32_t p) {
     return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
@@ -608,56 +776,27 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
   if (!crossed && core.distance >= radii_sum) {
     return false;
   }
-  r_c.first = pi;
-  r_c.second = pj;
-  r_c.core = core;
-  r_c.crossed = crossed;
-  r_c.parallel = parallel;
-  r_c.move = r_c.dv_first = r_c.dv_second = vec3(0.0f);
-  r_c.overlap = core.distance - radii_sum;
-  if (ctx.params == nullptr) {
-    return true;
-  }
-  const Span<vec3> v = ctx.v;
-  const float s = core.s, t = core.t;
-  const vec3 va = glm::mix(v[pi], v[pi + 1], s), vb = glm::mix(v[pj], v[pj + 1], t);
-  if (parallel) {
-    /* §5.3: near parallel, both take the average of their velocities. */
-    const vec3 average = 0.5f * (va + vb);
-    r_c.dv_first = average - va;
-    r_c.dv_second = average - vb;
-    return true;
-  }
-  /* §5.3: each moves half the overlap, in opposite directions along the vector between the
-   * closest points (s1 → s2). A pair that passed through each other goes back to the sides
-   * it came from: along the lines' common normal, oriented as b lay at the start, by the
-   * whole way through plus the radii. */
-  vec3 n;
-  float depth;
-  const float nn_len = std::sqrt(nn1);
-  if (crossed) {
-    n = (side0 > 0.0f ? 1.0f : -1.0f) * n1 / nn_len;
-    depth = radii_sum - glm::dot(core.point_b - core.point_a, n);
-    r_c.overlap = -depth;
-  }
-  else {
-    if (core.distance > 1e-4f * radii_sum) {
+  vec3 n(0.0f);
+  float depth = radii_sum - core.distance;
+  if (ctx.params != nullptr && !parallel) {
+    /* §5.3: each moves half the overlap, in opposite directions along the vector between the
+     * closest points (s1 → s2). A pair that passed through each other goes back to the sides
+     * it came from: along the lines' common normal, oriented as b lay at the start, by the
+     * whole way through plus the radii. */
+    const float nn_len = std::sqrt(nn1);
+    if (crossed) {
+      n = (side0 > 0.0f ? 1.0f : -1.0f) * n1 / nn_len;
+      depth = radii_sum - glm::dot(core.point_b - core.point_a, n);
+    }
+    else if (core.distance > 1e-4f * radii_sum) {
       n = (core.point_b - core.point_a) / core.distance;
     }
     else {
       const float side = ctx.start.sweeps() ? side0 : f1;
       n = (side >= 0.0f ? 1.0f : -1.0f) * n1 / nn_len;
     }
-    depth = radii_sum - core.distance;
   }
-  r_c.move = (0.5f * ctx.params->push_strength * depth) * n;
-  /* The approaching normal velocity is removed (inelastic, like the push), so that the next
-   * substep does not undo the push. */
-  const float approach = glm::dot(vb - va, n);
-  if (approach < 0.0f) {
-    r_c.dv_first = (0.5f * ctx.params->push_strength * approach) * n;
-    r_c.dv_second = -r_c.dv_first;
-  }
+  respond(ctx, pi, pj, core, radii_sum, parallel, crossed, n, depth, r_c);
   return true;
 }
 
@@ -725,7 +864,8 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                            const bool different_strands_only, SegmentGridScratch &g,
                            std::vector<SegmentContact> &r_contacts,
                            const Span<vec3> start_positions, const Span<vec3> velocities,
-                           const SweptSphereParams *params, const float h)
+                           const SweptSphereParams *params, const float h,
+                           const Span<vec3> half_widths)
 {
   r_contacts.clear();
   g.candidate_pairs_num = 0;
@@ -740,7 +880,8 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
   ctx.start.h = h;
   ctx.start.v = params != nullptr && start_positions.is_empty() ? velocities : Span<vec3>();
   ctx.sin_parallel = params != nullptr ? std::sin(params->near_parallel_angle) : 0.0f;
-  if (!build_grid(curve_offsets, positions, ctx.start, radii, default_radius, g)) {
+  ctx.half_widths = half_widths;
+  if (!build_grid(curve_offsets, positions, ctx.start, radii, default_radius, half_widths, g)) {
     return;
   }
   const ivec3 dims = g.dims;
@@ -756,7 +897,8 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                         const SegmentGridScratch::Segment *copy_a = nullptr,
                         const SegmentGridScratch::Segment *copy_b = nullptr) {
     const int32_t pi = std::min(point_a, point_b), pj = std::max(point_a, point_b);
-    if (curve_a == curve_b && (different_strands_only || pj - pi <= 1)) {
+    if (curve_a == curve_b && (different_strands_only || pj - pi <= 1 ||
+                               !folded_back(ctx, pi, pj))) {
       return int64_t(0);
     }
     if (point_a > point_b) {
@@ -798,6 +940,7 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
   const SegmentGridScratch::Segment *segments = g.entry_segments.data();
   const int32_t *entry_point = g.entry_point.data(), *entry_curve = g.entry_curve.data();
   const float *entry_sweep = g.entry_sweep.data();
+  const uint8_t *entry_strip = g.entry_strip.empty() ? nullptr : g.entry_strip.data();
 #if !defined(__SSE2__)
   /* The pair of entries e and f, whose boxes overlap (rejected: by cannot_touch). */
   const auto test_hit = [&](const uint32_t e, const uint32_t f, const bool rejected,
@@ -945,8 +1088,12 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
 #else
                   for (; f < f_stop && lo_x[f] <= hi; f++) {
                     if (boxes_meet(g, f, cross)) {
+                      const bool strip =
+                          entry_strip != nullptr && (entry_strip[e] | entry_strip[f]);
                       tested += test_hit(
-                          e, f, cannot_touch(segment, segments[f], sin_parallel2, sweeps), out);
+                          e, f,
+                          !strip && cannot_touch(segment, segments[f], sin_parallel2, sweeps),
+                          out);
                     }
                   }
 #endif
@@ -975,6 +1122,10 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                 }
                 for (int m = 0; m < n; m++) {
                   tested += is_candidate(e, four[m]);
+                  /* cannot_touch knows line swept spheres only: strips go to test_pair. */
+                  if (entry_strip != nullptr && (entry_strip[e] | entry_strip[four[m]])) {
+                    rejected &= ~(1 << m);
+                  }
                 }
                 for (int kept = ~rejected & ((1 << n) - 1); kept != 0; kept &= kept - 1) {
                   const uint32_t f = four[__builtin_ctz(unsigned(kept))];
@@ -1060,8 +1211,16 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
   HairHairStats stats;
   const MutableSpan<vec3> x = state.positions_wo;
   const MutableSpan<vec3> v = state.velocities_wo;
+  /* Strips' half widths turn with the head (its rotation: they keep their length). */
+  g.half_widths_wo.resize(size_t(state.strip_half_widths_hs.size()));
+  if (!g.half_widths_wo.empty()) {
+    const mat3 turn = HeadPose::from_matrix(state.head_to_world).rotation_matrix();
+    for (size_t p = 0; p < g.half_widths_wo.size(); p++) {
+      g.half_widths_wo[p] = turn * state.strip_half_widths_hs[int64_t(p)];
+    }
+  }
   find_segment_contacts(state.curve_offsets, x, state.radii, params.thickness, false, g, contacts,
-                        state.start_positions_wo, v, &params, state.h);
+                        state.start_positions_wo, v, &params, state.h, g.half_widths_wo);
   stats.pairs_num = int64_t(contacts.size());
   stats.candidates_num = g.candidate_pairs_num;
   for (const SegmentContact &c : contacts) {
@@ -1082,6 +1241,7 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
   ctx.v = v;
   ctx.params = &params;
   ctx.sin_parallel = std::sin(params.near_parallel_angle);
+  ctx.half_widths = g.half_widths_wo;
   size_t active = contacts.size(); /* the pairs the last pass kept, at the front */
   for (int iteration = 1; iteration < response_iterations; iteration++) {
     /* Each pair the last pass kept is re-tested (in parallel, into a copy), then those kept

@@ -2,7 +2,10 @@
 /* Hair–hair collision of Ward & Lin 2003 §5.3 as a substep pass.
  *
  * Every strand segment is a line swept sphere (LSS) whose radius is the strand's thickness
- * (§5.2). The SSVs are inserted into a uniform grid (§5.3; here its cells are columns along
+ * (§5.2); under level of detail a cluster's or strand group's segment is an LSS as thick as
+ * the group, and a strip's a rectangle swept sphere (RSS) as wide as the strip
+ * (SubstepState::strip_half_widths_hs), tested exactly (segment–rectangle,
+ * rectangle–rectangle) at the end of the substep. The SSVs are inserted into a uniform grid (§5.3; here its cells are columns along
  * the axis of the thinnest boxes, as wide as the largest box across them, up to twice the mean
  * segment length), each once, in the column of its box's lower corner, sorted along the
  * column; only segments in the same or neighbouring columns whose boxes overlap are tested
@@ -72,6 +75,8 @@ struct SegmentGridScratch {
   std::vector<int32_t> entry_curve;    /* its strand */
   std::vector<float> entry_sweep;      /* its segment_sweep */
   std::vector<int32_t> entry_segment;  /* its segment */
+  std::vector<uint8_t> entry_strip;    /* it is a strip's (with half widths; else empty) */
+  std::vector<vec3> half_widths_wo;    /* resolve_hair_hair: per point, the strips' */
   std::vector<uint32_t> cell_offsets;  /* per column: its first entry */
   std::vector<uint32_t> fill;          /* counting sort: per column, the next entry */
   std::vector<int32_t> big_segments;   /* segments whose box is wider than a column */
@@ -106,12 +111,15 @@ struct SegmentGridScratch {
  * each other on the way (continuous detection: each segment sweeps linearly from its start;
  * without them but with `params`, from x − h v).
  * The contacts carry §5.3's response computed from `velocities` (may be empty when `params`
- * is null; then no response is computed). */
+ * is null; then no response is computed). `half_widths` (per point, world; empty: none):
+ * a segment whose nodes have a non-zero one is a strip's, a rectangle swept sphere (§5.2;
+ * SubstepState::strip_half_widths_hs), tested at `positions` only. */
 void find_segment_contacts(Span<int32_t> curve_offsets, Span<vec3> positions, Span<float> radii,
                            float default_radius, bool different_strands_only,
                            SegmentGridScratch &scratch, std::vector<SegmentContact> &r_contacts,
                            Span<vec3> start_positions = {}, Span<vec3> velocities = {},
-                           const SweptSphereParams *params = nullptr, float h = 0.0f);
+                           const SweptSphereParams *params = nullptr, float h = 0.0f,
+                           Span<vec3> half_widths = {});
 
 /* Segment pairs of different strands closer than the sum of their radii: the `crossings`
  * report of a frame. */

@@ -282,8 +282,15 @@ void SsvObjectPass::apply(const SubstepState &state)
             const vec3 base_before = original_base;
             const float length = glm::length(x[k + 1] - base_before);
             original_base = x[k + 1];
-            const float r = state.radii.is_empty() ? params_.thickness :
-                                                     0.5f * (state.radii[k] + state.radii[k + 1]);
+            /* A strip's segment meets the body as the line swept sphere around its
+             * rectangle swept sphere (its half width added): no part of the strip stays in. */
+            const float r =
+                (state.radii.is_empty() ? params_.thickness :
+                                          0.5f * (state.radii[k] + state.radii[k + 1])) +
+                (state.strip_half_widths_hs.is_empty() ?
+                     0.0f :
+                     glm::length(0.5f * (state.strip_half_widths_hs[k] +
+                                         state.strip_half_widths_hs[k + 1])));
             /* The base moved (the previous segment was pushed): keep this segment's length. */
             if (a != base_before) {
               const vec3 dir = x[k + 1] - a;

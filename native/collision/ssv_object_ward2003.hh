@@ -27,6 +27,9 @@
  *   friction μ_f opposes the tangential motion with the magnitude μ_f |a_t| h of the tangential
  *   acceleration a_t (measured from the velocities of the previous substep), never reversing
  *   it (§5.4).
+ * A strip's segment (level of detail) is tested as the line swept sphere that bounds its
+ * rectangle swept sphere (radius plus half width), which keeps the guarantee below for the
+ * whole strip; the exact rectangle–triangle response is not done.
  * Order (§5.5): after hair–hair (a soft constraint), this pass is the hard one: no segment
  * ends the pass inside a body. */
 #include <memory>

@@ -116,6 +116,16 @@ Span<vec3> LodHierarchy::offsets(const int64_t node) const
   return Span<vec3>(offsets_).slice(node * skeleton_points_num_, skeleton_points_num_);
 }
 
+Span<float> LodHierarchy::spread(const int64_t node) const
+{
+  return Span<float>(spread_).slice(node * skeleton_points_num_, skeleton_points_num_);
+}
+
+Span<vec3> LodHierarchy::half_width(const int64_t node) const
+{
+  return Span<vec3>(half_width_).slice(node * skeleton_points_num_, skeleton_points_num_);
+}
+
 int32_t LodHierarchy::add_node(const int32_t parent, const LodKind kind, const Range strands)
 {
   const int32_t node = int32_t(depth_.size());
@@ -272,6 +282,45 @@ void LodHierarchy::finish_node(const int32_t node, const Span<vec3> resampled,
     }
   }
   radius_[size_t(node)] = radius;
+  /* §5.2: the spread of the strands around each control point. */
+  for (int32_t k = 0; k < n; k++) {
+    const vec3 chord = skeleton[std::min(k + 1, n - 1)] - skeleton[std::max(k - 1, 0)];
+    const float chord_length = glm::length(chord);
+    const vec3 tangent = chord_length > 0.0f ? chord / chord_length : vec3(0.0f);
+    const auto across = [&](const int32_t strand) {
+      const vec3 d = resampled[int64_t(strand) * n + k] - skeleton[k];
+      return d - glm::dot(d, tangent) * tangent;
+    };
+    double sum2 = 0.0;
+    glm::dmat3 covariance(0.0);
+    vec3 widest(0.0f);
+    for (const int32_t strand : members) {
+      const vec3 d = across(strand);
+      sum2 += double(glm::dot(d, d));
+      covariance += glm::outerProduct(glm::dvec3(d), glm::dvec3(d));
+      widest = glm::dot(d, d) > glm::dot(widest, widest) ? d : widest;
+    }
+    const double count = double(members.size());
+    vec3 half_width(0.0f);
+    double along2 = 0.0;
+    if (kind_[size_t(node)] == LodKind::Strip && glm::dot(widest, widest) > 0.0f) {
+      /* The principal axis: power iteration from the widest offset. */
+      glm::dvec3 axis = glm::normalize(glm::dvec3(widest));
+      for (int iteration = 0; iteration < 32; iteration++) {
+        const glm::dvec3 next = covariance * axis;
+        const double length = glm::length(next);
+        if (!(length > 0.0)) {
+          break;
+        }
+        axis = next / length;
+      }
+      along2 = glm::dot(axis, covariance * axis) / count;
+      half_width = vec3(std::sqrt(3.0 * along2) * axis);
+    }
+    const size_t i = size_t(int64_t(node) * n + k);
+    spread_[i] = float(std::sqrt(std::max(sum2 / count - along2, 0.0)));
+    half_width_[i] = half_width;
+  }
   root_normals_[size_t(node)] = glm::length(normal) > 1e-6f ?
                                     glm::normalize(normal) :
                                     glm::normalize(skeleton[1] - skeleton[0]);
@@ -362,6 +411,8 @@ LodHierarchy::LodHierarchy(const Span<int32_t> curve_offsets, const Span<vec3> r
   rest_skeletons_.resize(nodes * size_t(n));
   rest_frames_.resize(nodes * size_t(n));
   offsets_.resize(nodes * size_t(n));
+  spread_.resize(nodes * size_t(n));
+  half_width_.resize(nodes * size_t(n));
   /* Parents come before their children, so their frames are ready for the offsets. */
   for (int32_t depth = 0; depth <= max_depth_; depth++) {
     parallel_for(int64_t(nodes), 64, [&](const IndexRange range) {

@@ -67,6 +67,14 @@ class LodHierarchy {
   }
   /* m, the largest distance of a covered strand's resampled points from the skeleton's. */
   float radius(int64_t node) const { return radius_[size_t(node)]; }
+  /* Per control point of a node's rest skeleton, how far its strands spread around it (§5.2:
+   * the group's swept-sphere volume): `spread`, in m, the root mean square distance of its
+   * strands' resampled points from the control point (for a strip, across its plane only);
+   * and for a strip, `half_width`, half its width: the principal axis of those points in the
+   * plane normal to the skeleton, √3 times their root mean square along it (a band's half
+   * width); zero for clusters and strand groups. */
+  Span<float> spread(int64_t node) const;
+  Span<vec3> half_width(int64_t node) const;
   /* The n control points of a node's rest skeleton, and their rest frames (columns tangent,
    * bitangent, normal; frame 0 is the root frame, frame i > 0 the frame of the segment that
    * ends at point i, transported without twist). */
@@ -118,6 +126,8 @@ class LodHierarchy {
   std::vector<vec3> rest_skeletons_;
   std::vector<mat3> rest_frames_;
   std::vector<vec3> offsets_;
+  std::vector<float> spread_;
+  std::vector<vec3> half_width_;
 };
 
 /* Per strand, n points evenly spaced in arc length along it (r_resampled holds n per strand),

@@ -70,6 +70,25 @@ void LodSolver::set_colliders(const ColliderSet *colliders, const CollisionParam
   solver_->set_colliders(colliders, params);
 }
 
+void LodSolver::add_pass(SubstepPass *const pass, const float strand_radius)
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  const int64_t nodes = hierarchy_.nodes_num();
+  std::vector<float> radii(size_t(nodes * n));
+  std::vector<vec3> half_widths_hs(size_t(nodes * n));
+  const mat3 world_to_head = glm::transpose(rest_pose_.rotation_matrix());
+  for (int64_t node = 0; node < nodes; node++) {
+    const Span<float> spread = hierarchy_.spread(node);
+    const Span<vec3> half_width = hierarchy_.half_width(node);
+    for (int32_t k = 0; k < n; k++) {
+      radii[size_t(node * n + k)] = strand_radius + spread[k];
+      half_widths_hs[size_t(node * n + k)] = world_to_head * half_width[k];
+    }
+  }
+  solver_->set_pass_volumes(radii, half_widths_hs);
+  solver_->add_pass(pass);
+}
+
 void LodSolver::set_active(const int32_t node, const bool active)
 {
   active_[size_t(node)] = active ? 1 : 0;
@@ -440,7 +459,7 @@ void LodSolver::step(const float frame_dt, const mat4 &head_to_world, const mat4
     stepped_[size_t(node)] = active_[size_t(node)] || shown_[size_t(node)];
     current_[size_t(node)] = stepped_[size_t(node)];
   }
-  solver_->set_stepped(stepped_);
+  solver_->set_stepped(stepped_, active_);
   solver_->step(frame_dt, head_to_world);
   head_rotation_ = HeadPose::from_matrix(head_to_world).rotation_matrix() *
                    glm::transpose(rest_pose_.rotation_matrix());

@@ -29,6 +29,7 @@
  * to zero with time constant transition_time (§6.3: "a spring force is used to subtly pull
  * the children into place"). */
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "collision/collider.hh"
@@ -58,6 +59,17 @@ class LodSolver {
   /* Hair-object collision of every skeleton (see StrandSolver::set_colliders), and the
    * bodies that occlude hair (§6.1). nullptr: neither. */
   void set_colliders(const ColliderSet *colliders, const CollisionParams &params);
+  /* Only the bodies that occlude hair (when the skeletons collide by a pass instead). */
+  void set_occluders(const ColliderSet *occluders) { colliders_ = occluders; }
+  /* Runs `pass` after every substep over the active skeletons (not over one kept a frame
+   * longer to measure a switch: it would meet the skeleton that replaced it), each seen as
+   * its group's swept-sphere volume (Ward & Lin 2003 §5.2): a strip segment a rectangle swept
+   * sphere as wide as the strip, a cluster or strand group segment a line swept sphere; the
+   * radius `strand_radius` (m, a single strand's) plus the group's spread
+   * (LodHierarchy::spread). The pass must outlive the solver. */
+  void add_pass(SubstepPass *pass, float strand_radius);
+  /* Milliseconds the pass named `name` took during the last step. */
+  double pass_ms(const std::string &name) const { return solver_->pass_ms(name); }
   /* One frame: select and switch (§6.1-6.3) from the state at the end of the last frame and
    * this frame's camera, step every level, place the strands. Levels change by one per frame
    * except for occlusion, and on the first frame after a reset, which starts at the levels

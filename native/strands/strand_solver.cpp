@@ -177,17 +177,80 @@ void StrandSolver::set_pinned(const Span<uint8_t> pinned)
   velocities_before_.resize(rest_positions_wo_.size());
 }
 
-void StrandSolver::set_stepped(const Span<uint8_t> stepped)
+void StrandSolver::set_stepped(const Span<uint8_t> stepped, const Span<uint8_t> in_passes)
 {
   assert(stepped.is_empty() || stepped.size() == curves_num());
+  assert(in_passes.is_empty() || in_passes.size() == curves_num());
   stepped_.assign(stepped.begin(), stepped.end());
   stepped_curves_.clear();
+  pass_view_.curves.clear();
   for (int64_t curve = 0; curve < stepped.size(); curve++) {
     if (stepped[curve]) {
       stepped_curves_.push_back(curve);
     }
   }
+  const bool narrowed = !in_passes.is_empty();
+  for (int64_t curve = 0; curve < curves_num(); curve++) {
+    if ((stepped.is_empty() || stepped[curve]) && (!narrowed || in_passes[curve])) {
+      pass_view_.curves.push_back(curve);
+    }
+  }
+  pass_view_used_ = !stepped.is_empty() || narrowed;
+  pass_view_.offsets.assign(1, 0);
+  for (const int64_t curve : pass_view_.curves) {
+    pass_view_.offsets.push_back(pass_view_.offsets.back() +
+                                 int32_t(curve_points(curve_offsets_, curve).size));
+  }
   group_strands();
+}
+
+void StrandSolver::set_pass_volumes(const Span<float> radii,
+                                    const Span<vec3> strip_half_widths_hs)
+{
+  assert(radii.is_empty() || radii.size() == int64_t(rest_positions_wo_.size()));
+  assert(strip_half_widths_hs.is_empty() ||
+         strip_half_widths_hs.size() == int64_t(rest_positions_wo_.size()));
+  pass_radii_.assign(radii.begin(), radii.end());
+  pass_half_widths_hs_.assign(strip_half_widths_hs.begin(), strip_half_widths_hs.end());
+}
+
+void StrandSolver::gather_pass_view()
+{
+  PassView &view = pass_view_;
+  const size_t points = size_t(view.offsets.back());
+  view.positions.resize(points);
+  view.velocities.resize(points);
+  view.start_positions.resize(points);
+  view.radii.resize(pass_radii_.empty() ? 0 : points);
+  view.half_widths_hs.resize(pass_half_widths_hs_.empty() ? 0 : points);
+  parallel_for(int64_t(view.curves.size()), 256, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      const IndexRange from = curve_points(curve_offsets_, view.curves[size_t(i)]);
+      const size_t to = size_t(view.offsets[size_t(i)]), n = size_t(from.size);
+      std::copy_n(&positions_wo_[size_t(from.start)], n, &view.positions[to]);
+      std::copy_n(&velocities_wo_[size_t(from.start)], n, &view.velocities[to]);
+      std::copy_n(&positions_start_[size_t(from.start)], n, &view.start_positions[to]);
+      if (!view.radii.empty()) {
+        std::copy_n(&pass_radii_[size_t(from.start)], n, &view.radii[to]);
+      }
+      if (!view.half_widths_hs.empty()) {
+        std::copy_n(&pass_half_widths_hs_[size_t(from.start)], n, &view.half_widths_hs[to]);
+      }
+    }
+  });
+}
+
+void StrandSolver::scatter_pass_view()
+{
+  const PassView &view = pass_view_;
+  parallel_for(int64_t(view.curves.size()), 256, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      const IndexRange to = curve_points(curve_offsets_, view.curves[size_t(i)]);
+      const size_t from = size_t(view.offsets[size_t(i)]), n = size_t(to.size);
+      std::copy_n(&view.positions[from], n, &positions_wo_[size_t(to.start)]);
+      std::copy_n(&view.velocities[from], n, &velocities_wo_[size_t(to.start)]);
+    }
+  });
 }
 
 void StrandSolver::group_strands()
@@ -673,11 +736,25 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
       SubstepState state;
       state.h = substep.h;
       state.time = substep.time;
-      state.curve_offsets = curve_offsets_;
-      state.positions_wo = positions_wo_;
-      state.velocities_wo = velocities_wo_;
-      state.start_positions_wo = positions_start_;
       state.head_to_world = pose_matrix(substep.pose);
+      if (pass_view_used_) {
+        /* The passes see only their strands: gathered here, scattered back after. */
+        gather_pass_view();
+        state.curve_offsets = pass_view_.offsets;
+        state.positions_wo = pass_view_.positions;
+        state.velocities_wo = pass_view_.velocities;
+        state.start_positions_wo = pass_view_.start_positions;
+        state.radii = pass_view_.radii;
+        state.strip_half_widths_hs = pass_view_.half_widths_hs;
+      }
+      else {
+        state.curve_offsets = curve_offsets_;
+        state.positions_wo = positions_wo_;
+        state.velocities_wo = velocities_wo_;
+        state.start_positions_wo = positions_start_;
+        state.radii = pass_radii_;
+        state.strip_half_widths_hs = pass_half_widths_hs_;
+      }
       for (size_t p = 0; p < passes_.size(); p++) {
         const auto start = std::chrono::steady_clock::now();
         passes_[p]->apply(state);
@@ -685,20 +762,8 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
                            std::chrono::steady_clock::now() - start)
                            .count();
       }
-      if (masked) {
-        /* The passes saw the held strands where they are held; what they did to them is
-         * undone (a held strand keeps its nodes). */
-        parallel_for(curves_num(), 256, [&](const IndexRange range) {
-          for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
-            if (!stepped_[size_t(curve)]) {
-              const IndexRange points = curve_points(curve_offsets_, curve);
-              std::copy_n(&positions_before_[size_t(points.start)], points.size,
-                          &positions_wo_[size_t(points.start)]);
-              std::copy_n(&velocities_before_[size_t(points.start)], points.size,
-                          &velocities_wo_[size_t(points.start)]);
-            }
-          }
-        });
+      if (pass_view_used_) {
+        scatter_pass_view();
       }
       for_each_curve([&](const int64_t curve, Counts &chunk) {
         if (diverged[size_t(curve)]) {

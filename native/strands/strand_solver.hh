@@ -152,17 +152,23 @@ class StrandSolver {
   int64_t pins_num() const { return int64_t(pins_.size()); }
   void clear_passes();
   Span<SubstepPass *> passes() const { return passes_; }
+  /* What the passes see of each strand's swept-sphere volume (SubstepState): per point, its
+   * radius in m, and half a strip's width across it in the head's frame (zero: not a strip).
+   * Either empty (the default): none given. */
+  void set_pass_volumes(Span<float> radii, Span<vec3> strip_half_widths_hs);
   /* Milliseconds the pass named `name` took during the last step (all substeps); 0 for a
    * name no pass has. */
   double pass_ms(const std::string &name) const;
 
   /* Steps only some strands: per strand, non-zero for the strands the next steps advance;
    * an empty span (the default) advances every strand, bit for bit as without a mask.
+   * `in_passes`, when given, narrows what the substep passes see to the stepped strands it
+   * marks (level of detail keeps a skeleton it steps only to measure a switch out of hair–hair
+   * collision with the one that replaced it); empty: every stepped strand.
    *
    * A strand left out is held, not simulated: its angles and rates stay as they are, i.e. it
    * keeps its shape relative to its root frame, which the head carries; nothing of it is
-   * integrated, collided or counted (passes see its nodes where they are held, and what they
-   * do to them is undone), and its nodes, velocities and
+   * integrated, collided or counted (the passes do not see it), and its nodes, velocities and
    * root frame stay where its last step (or place_curve) left them, however far the head
    * has moved since. Before it is stepped again, place_curve puts it where the head is now
    * on whatever angles and rates it then has (a state written through angles_for_write), so
@@ -170,7 +176,7 @@ class StrandSolver {
    * strand kept out for a long time resumes as one whose state was just written. (A strand
    * that was stepped by the last step and whose state nobody wrote since needs no
    * place_curve: its nodes are where the head and its angles put them.) */
-  void set_stepped(Span<uint8_t> stepped);
+  void set_stepped(Span<uint8_t> stepped, Span<uint8_t> in_passes = {});
   /* Per strand, the mask set_stepped keeps (empty: every strand is stepped). */
   Span<uint8_t> stepped() const { return stepped_; }
   /* Strands the last step advanced. */
@@ -401,6 +407,20 @@ class StrandSolver {
   std::vector<vec3> velocities_before_;
   std::vector<vec3> positions_start_; /* the nodes at the start of a substep (with passes) */
   std::vector<double> pass_ms_;
+  std::vector<float> pass_radii_;         /* set_pass_volumes, per point */
+  std::vector<vec3> pass_half_widths_hs_; /* set_pass_volumes, per point */
+  /* What the passes see when some strands are not (set_stepped): those strands' curves in
+   * order, their offsets, and their per point arrays gathered before and scattered after. */
+  struct PassView {
+    std::vector<int64_t> curves;
+    std::vector<int32_t> offsets;
+    std::vector<vec3> positions, velocities, start_positions, half_widths_hs;
+    std::vector<float> radii;
+  };
+  PassView pass_view_;
+  bool pass_view_used_ = false;
+  void gather_pass_view();
+  void scatter_pass_view();
 
   /* The head at the end of the last step, and its velocity over that step. */
   HeadPose rest_pose_;

@@ -29,6 +29,11 @@ struct SubstepState {
   Span<vec3> start_positions_wo;
   /* m, per point: the strand's radius (swept-sphere thickness); empty when unknown. */
   Span<float> radii;
+  /* m, per point: half the width of a strip across its segments, in the head's frame
+   * (head_to_world turns it): a segment whose two nodes give a non-zero one is a rectangle
+   * swept sphere (Ward & Lin 2003 §5.2), its rectangle the segment widened by it both ways.
+   * Empty, or zero: a line swept sphere. */
+  Span<vec3> strip_half_widths_hs;
   /* The head at the end of the substep (grids that move with the head use it). */
   mat4 head_to_world{1.0f};
 };

@@ -1,0 +1,203 @@
+/* Swept spheres under level of detail (Ward & Lin 2003 §5.2 with §4, §6): a strip's segment
+ * is a rectangle swept sphere as wide as the strip, a cluster's or strand group's a line swept
+ * sphere as thick as the group, and the hair–hair pass (§5.3) runs over the active skeletons
+ * of every level together. */
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "collision/hair_hair_ward2003.hh"
+#include "lod/hierarchy_ward2003.hh"
+#include "lod/lod_solver_ward2003.hh"
+#include "lod_scenes.hh"
+#include "strand_scenes.hh"
+
+using namespace hairdyn;
+using namespace hairdyn::test;
+
+namespace {
+
+/* Two sheets of `per_sheet` straight strands (10 segments of 2 cm), each sheet a top strip
+ * (their roots' u apart): sheet A horizontal along +X from roots spaced `spacing` along Y at
+ * z = 0, sheet B below it in the plane x = 0.06, its strands along (0, 1, −1), rooted at
+ * their lower ends, its upper ends at z = −0.02 (apart from A at the start). Limp strands
+ * under gravity: A falls onto B. */
+struct Sheets {
+  strand_scenes::Groom groom;
+  std::vector<vec2> uvs;
+  int per_sheet = 12;
+
+  explicit Sheets(const float spacing = 0.01f)
+  {
+    const float half = 0.5f * spacing * float(per_sheet - 1);
+    for (int i = 0; i < per_sheet; i++) {
+      groom.add_straight(vec3(0.0f, -half + spacing * float(i), 0.0f), vec3(1, 0, 0), 0.2f, 10);
+      uvs.emplace_back(0.25f, float(i) / float(per_sheet));
+    }
+    const vec3 down = 0.2f * glm::normalize(vec3(0, 1, -1));
+    for (int i = 0; i < per_sheet; i++) {
+      const vec3 top(0.06f, -half - 0.045f + spacing * float(i), -0.02f);
+      groom.add_straight(top + down, -down, 0.2f, 10);
+      uvs.emplace_back(0.75f, float(i) / float(per_sheet));
+    }
+  }
+};
+
+LodParams sheet_params(const int32_t level)
+{
+  LodParams params;
+  params.strips_num = 2;
+  params.strip_splits = 0;
+  params.cluster_min_radius = 0.02f;
+  params.use_occlusion = false;
+  params.coarsest_level = params.finest_level = level; /* held at one level */
+  return params;
+}
+
+struct SheetsRun {
+  int64_t crossings = 0; /* sheet A's output segments through sheet B's, over the frames */
+  float tip_drop = 0.0f; /* m, how far sheet A's tips fell on average */
+  float tip_x = 0.0f;    /* m, where they are along X on average (sheet B: at 0.06) */
+  bool finite = true;
+  int64_t pairs = 0; /* the pass's intersecting pairs, over the frames */
+};
+
+/* 40 frames at 100 fps, 4 substeps each, the level of detail held at `level`, with the
+ * hair–hair pass or without. */
+SheetsRun run_sheets(const int32_t level, const bool hair_hair)
+{
+  const Sheets sheets;
+  StrandParams strand_params;
+  strand_params.k_theta = strand_params.k_phi = 1e-9f;
+  strand_params.damping = 1e-11f;
+  strand_params.substeps = 4;
+  LodSolver solver(sheets.groom.offsets, sheets.groom.positions, sheets.uvs, {}, mat4(1.0f),
+                   strand_params, WindParams(), sheet_params(level));
+  SweptSphereParams params;
+  params.hair_hair = true;
+  HairHairPass pass(params);
+  if (hair_hair) {
+    solver.add_pass(&pass, params.thickness);
+  }
+  const mat4 camera = camera_view_projection(vec3(0.0f, -3.0f, 0.0f));
+  SheetsRun run;
+  std::vector<vec3> before(solver.positions().begin(), solver.positions().end());
+  for (int frame = 0; frame < 40; frame++) {
+    solver.step(0.01f, mat4(1.0f), camera);
+    const std::vector<vec3> after(solver.positions().begin(), solver.positions().end());
+    run.crossings += strand_scenes::count_sheet_crossings(sheets.groom, sheets.per_sheet, before,
+                                                          after, 0.02f);
+    for (const vec3 &p : after) {
+      run.finite = run.finite && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    }
+    before = after;
+    run.pairs += pass.stats().pairs_num;
+    pass.reset_stats();
+  }
+  for (int i = 0; i < sheets.per_sheet; i++) {
+    const vec3 tip = before[size_t(sheets.groom.offsets[size_t(i) + 1] - 1)];
+    run.tip_drop -= tip.z / float(sheets.per_sheet);
+    run.tip_x += tip.x / float(sheets.per_sheet);
+  }
+  return run;
+}
+
+}  // namespace
+
+/* A top strip of one row of N evenly spaced straight strands: its half width is half the
+ * row's width as a band gives it, √3 times the root mean square offset, (d/2)·√(N² − 1) for
+ * spacing d, along the row, at every control point; it has no thickness across the row. Its
+ * clusters have no width, and their spread is their strands' root mean square distance from
+ * the skeleton (sheet A's: its strands lie across their skeleton, so the distance is all
+ * across it). */
+TEST(LodHierarchy, StripsKnowTheirWidthAndGroupsTheirSpread)
+{
+  const Sheets sheets;
+  LodParams params = sheet_params(0);
+  const LodHierarchy hierarchy(sheets.groom.offsets, sheets.groom.positions, sheets.uvs, {},
+                               params);
+  ASSERT_EQ(hierarchy.top_nodes_num(), 2);
+  ASSERT_EQ(hierarchy.kind(0), LodKind::Strip);
+  const int32_t n = hierarchy.skeleton_points_num();
+  ASSERT_EQ(n, 11) << "the skeletons sample the strands at their own points";
+  const float d = 0.01f, N = float(sheets.per_sheet);
+  const float expected = 0.5f * d * std::sqrt(N * N - 1.0f);
+  for (int32_t k = 0; k < n; k++) {
+    const vec3 half = hierarchy.half_width(0)[k];
+    EXPECT_NEAR(glm::length(half), expected, 1e-4f * expected) << "control point " << k;
+    EXPECT_GT(std::abs(half.y), 0.9999f * glm::length(half)) << "across the row";
+    EXPECT_LT(hierarchy.spread(0)[k], 1e-5f) << "a flat row has no thickness";
+  }
+  int64_t clusters = 0;
+  for (int64_t node = 0; node < hierarchy.nodes_num(); node++) {
+    if (hierarchy.kind(node) == LodKind::Strip || hierarchy.top_node(node) != 0) {
+      continue;
+    }
+    clusters++;
+    const Span<vec3> skeleton = hierarchy.rest_skeleton(node);
+    for (int32_t k = 0; k < n; k++) {
+      EXPECT_EQ(hierarchy.half_width(node)[k], vec3(0.0f));
+      double sum2 = 0.0;
+      for (const int32_t strand : hierarchy.strands(node)) {
+        const vec3 d_k = sheets.groom.positions[size_t(sheets.groom.offsets[size_t(strand)] + k)] -
+                         skeleton[k];
+        sum2 += double(glm::dot(d_k, d_k));
+      }
+      const float rms = float(std::sqrt(sum2 / double(hierarchy.strands(node).size())));
+      EXPECT_NEAR(hierarchy.spread(node)[k], rms, 1e-5f + 1e-3f * rms);
+    }
+  }
+  EXPECT_GT(clusters, 0);
+}
+
+/* A strip's segment is a rectangle swept sphere: a strand segment lying 0.8 mm above the
+ * strip's plane, 3 cm to the side of its skeleton but over the strip, touches it (radii
+ * 0.5 mm each) and is pushed up; as a line swept sphere (no width) the strip misses it. */
+TEST(LodSweptSpheres, AStripSegmentIsARectangle)
+{
+  const std::vector<int32_t> offsets{0, 2, 4};
+  const std::vector<vec3> positions{vec3(0.0f), vec3(0.02f, 0.0f, 0.0f),
+                                    vec3(0.01f, 0.03f, 0.0008f), vec3(0.01f, 0.04f, 0.0008f)};
+  const std::vector<vec3> velocities(4, vec3(0.0f));
+  const std::vector<vec3> half_widths{vec3(0.0f, 0.05f, 0.0f), vec3(0.0f, 0.05f, 0.0f),
+                                      vec3(0.0f), vec3(0.0f)};
+  SweptSphereParams params;
+  SegmentGridScratch scratch;
+  std::vector<SegmentContact> contacts;
+  find_segment_contacts(offsets, positions, {}, 5e-4f, true, scratch, contacts, {}, velocities,
+                        &params, 0.01f, half_widths);
+  ASSERT_EQ(contacts.size(), 1u);
+  EXPECT_NEAR(contacts[0].overlap, -2e-4f, 1e-6f);
+  EXPECT_NEAR(contacts[0].core.point_b.z - contacts[0].core.point_a.z, 8e-4f, 1e-6f);
+  EXPECT_GT(contacts[0].move.z, 0.0f) << "the strand segment is pushed up, off the strip";
+  EXPECT_NEAR(glm::length(contacts[0].move), 1e-4f, 1e-6f) << "half the overlap each";
+  find_segment_contacts(offsets, positions, {}, 5e-4f, true, scratch, contacts, {}, velocities,
+                        &params, 0.01f);
+  EXPECT_TRUE(contacts.empty());
+}
+
+/* Sheet A falls onto sheet B under level of detail held at the strips (rectangle swept
+ * spheres), at their clusters and at the finest level (line swept spheres as thick as each
+ * group): with hair–hair on, A's strands go through B's at least 5× less often than without,
+ * and A still falls onto B. */
+TEST(LodSweptSpheres, HairHairKeepsSheetsApartAtEveryLevel)
+{
+  for (const int32_t level : {0, 1, 3}) {
+    SCOPED_TRACE("level " + std::to_string(level));
+    const SheetsRun off = run_sheets(level, false);
+    const SheetsRun on = run_sheets(level, true);
+    std::printf("level %d: %lld crossings off, %lld on (%lld pairs); A's tips fell %.3f m off, "
+                "%.3f m on, and are at x = %.3f m off, %.3f m on\n",
+                level, (long long)off.crossings, (long long)on.crossings, (long long)on.pairs,
+                off.tip_drop, on.tip_drop, off.tip_x, on.tip_x);
+    EXPECT_TRUE(off.finite && on.finite);
+    EXPECT_GE(off.crossings, 20) << "the sheets must fall through each other";
+    EXPECT_LE(5 * on.crossings, off.crossings);
+    EXPECT_GT(on.pairs, 0);
+    EXPECT_GT(on.tip_drop, 0.02f) << "A falls onto B, it does not hang still";
+    /* Without, A swings through B and hangs on the near side; with, it drapes over B. */
+    EXPECT_LT(off.tip_x, 0.06f);
+    EXPECT_GT(on.tip_x, 0.06f);
+  }
+}
