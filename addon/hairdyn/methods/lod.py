@@ -5,11 +5,14 @@ strand parameters, wind and colliders) and follows a camera: its view-projection
 from the scene every frame. Every strand of the groom follows the skeleton that drives it, so the
 output keeps the groom's topology; the point attribute `lod_level` says which level drives it.
 
-The LodSolver runs no substep passes, so the volume's smoothing and targeting and the swept
-spheres are refused with it (strands.NoPasses); shell normals, child hairs and the collision maps
-work. Pinned points (the `hairdyn_fixed` attribute) are refused too: the skeletons it simulates
-are not the artist's strands, so nothing would hold a pinned point on the head. With "Measure
-Error" a plain StrandSolver runs the same frames alongside (twice the work) and the report gives
+The swept spheres (hair-hair, segment-exact body collision) run over the active skeletons of every
+level, each its group's volume (Ward & Lin 2003 §5.2: a strip a rectangle swept sphere, a cluster
+or strand group a line swept sphere as thick as the group). The volume's smoothing and targeting
+are refused with it (strands.NoPasses): a skeleton stands for many strands, which their density
+grid does not know. Shell normals, child hairs and the collision maps work. Pinned points (the
+`hairdyn_fixed` attribute) are refused too: the skeletons it simulates are not the artist's
+strands, so nothing would hold a pinned point on the head. With "Measure Error" a plain
+StrandSolver runs the same frames alongside (twice the work, the same passes) and the report gives
 the mean distance between the two, as a share of the hair length.
 """
 
@@ -177,7 +180,7 @@ class LodStrands(Attached):
             wind,
             build.params("lod"),
         )
-        self.fine = None
+        self.fine, self.colliders = None, None
         if self.options.measure_error:  # the same strands without level of detail
             self.fine = native.StrandSolver(
                 groom.curve_offsets,
@@ -207,13 +210,34 @@ class LodStrands(Attached):
 
     # The StrandSolver's interface, as the Strands method uses it.
 
-    def add_pass(self, _substep_pass):
-        raise NoPasses(NAME)
+    def add_pass(self, substep_pass):
+        """The swept spheres' passes run over the active skeletons, each seen as its group's
+        swept-sphere volume around strands of the pass's thickness; the fine reference runs
+        the same pass (a pass of its own, with the same parameters)."""
+        kinds = (self.native.HairHairPass, self.native.SsvObjectPass)
+        if not isinstance(substep_pass, kinds):
+            raise NoPasses(f"{NAME} runs only the swept spheres' substep passes")
+        self.solver.add_pass(substep_pass, substep_pass.params.thickness)
+        if self.fine is not None:
+            if isinstance(substep_pass, self.native.HairHairPass):
+                twin = self.native.HairHairPass(substep_pass.params)
+            else:
+                twin = self.native.SsvObjectPass(self.colliders, substep_pass.params)
+            self.fine.add_pass(twin)
+
+    def pass_ms(self, name):
+        return self.solver.pass_ms(name)
 
     def set_colliders(self, colliders, params):
         """Every skeleton collides (and the colliders hide hair from the camera, §6.1); the
-        fine reference collides the same way."""
-        self.solver.set_colliders(colliders, params)
+        fine reference collides the same way. None after colliders were set (body collision
+        by swept spheres only): the maps are off, and the colliders still hide hair."""
+        if colliders is None and self.colliders is not None:
+            self.solver.set_colliders(None, params)
+            self.solver.set_occluders(self.colliders)
+        else:
+            self.solver.set_colliders(colliders, params)
+            self.colliders = colliders
         if self.fine is not None:
             self.fine.set_colliders(colliders, params)
 
@@ -310,10 +334,7 @@ def _draw(layout, settings):
     layout.prop(settings.lod_options, "camera")
     layout.prop(settings.lod_options, "measure_error")
     layout.prop(settings.lod_options, "color_by_level")
-    layout.label(
-        text="Not with volume smoothing, targeting or swept spheres (no substep passes)",
-        icon='INFO',
-    )
+    layout.label(text="Not with volume smoothing or targeting", icon='INFO')
     layout.label(text="Not with pinned points (hairdyn_fixed)", icon='INFO')
 
 

@@ -6,8 +6,8 @@ An extension is an `Extension`: the settings group(s) it adds (a native paramete
 PropertyGroup is generated, and/or add-on-only options), its panel sections, and
 `attach(solver, build)`, called once the solver is built, which adds its native pass. An
 extension may instead replace the solver (`solver(build, params, root_normals)`: level of
-detail); a replacement that runs no substep passes raises `NoPasses` from add_pass, and the
-combination is refused with a sentence naming both.
+detail); a replacement that cannot run a pass raises `NoPasses` (saying what it runs) from
+add_pass, and the combination is refused with a sentence naming both.
 `register_extension()` must run before the add-on registers (import it from methods/__init__).
 """
 
@@ -44,8 +44,8 @@ class Extension:
 
 
 class NoPasses(Exception):
-    """Raised by a solver stand-in's add_pass: it cannot run substep passes (its argument: the
-    stand-in's name, for the message)."""
+    """Raised by a solver stand-in's add_pass: it cannot run that pass (its argument: what the
+    stand-in runs, a clause naming it, for the message)."""
 
 
 class Attached:
@@ -159,8 +159,8 @@ class Strands(Method):
                 item = extension.attach(self.solver, build)
             except NoPasses as error:
                 raise HairdynError(
-                    f"{error} runs no substep passes, so it cannot be combined with "
-                    f"{extension.label}: turn one of them off"
+                    f"{error}, so it cannot be combined with {extension.label}: turn one of "
+                    "them off"
                 ) from None
             if item is not None:
                 self.attached.append(item)
