@@ -166,7 +166,7 @@ TEST(LodSweptSpheres, AStripSegmentIsARectangle)
   SegmentGridScratch scratch;
   std::vector<SegmentContact> contacts;
   find_segment_contacts(offsets, positions, {}, 5e-4f, true, scratch, contacts, {}, velocities,
-                        &params, 0.01f, half_widths);
+                        &params, 0.01f, GroupVolumes{half_widths, {}});
   ASSERT_EQ(contacts.size(), 1u);
   EXPECT_NEAR(contacts[0].overlap, -2e-4f, 1e-6f);
   EXPECT_NEAR(contacts[0].core.point_b.z - contacts[0].core.point_a.z, 8e-4f, 1e-6f);

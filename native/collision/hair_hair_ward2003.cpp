@@ -518,7 +518,8 @@ struct PairContext {
   StartPositions start;
   Span<float> radii;
   float default_radius = 0.0f;
-  Span<vec3> half_widths; /* per point, world; empty: no strips */
+  Span<vec3> half_widths;    /* per point, world; empty: no strips */
+  Span<vec3> rest_positions; /* per point, in the half widths' frame; empty: none */
   Span<vec3> v;
   const SweptSphereParams *params = nullptr;
   float sin_parallel = 0.0f;
@@ -572,6 +573,44 @@ inline vec3 segment_half_width(const PairContext &ctx, const int32_t p)
                                       0.5f * (ctx.half_widths[p] + ctx.half_widths[p + 1]);
 }
 
+/* The closest points of two segments' cores: each a rectangle when it has a half width (a
+ * strip's: the segment widened by it both ways), else the segment. point_a on the first. */
+CoreDistance group_cores(const vec3 &a0, const vec3 &a1, const vec3 &half_a, const vec3 &b0,
+                         const vec3 &b1, const vec3 &half_b)
+{
+  const auto rect = [](const vec3 &p0, const vec3 &p1, const vec3 &half) {
+    return RectSS::from_segment(p0, p1, half, 2.0f * glm::length(half), 0.0f);
+  };
+  const bool strip_a = half_a != vec3(0.0f), strip_b = half_b != vec3(0.0f);
+  if (strip_a && strip_b) {
+    return rectangle_rectangle_distance(rect(a0, a1, half_a), rect(b0, b1, half_b));
+  }
+  if (strip_a) {
+    CoreDistance core = segment_rectangle_distance(b0, b1, rect(a0, a1, half_a));
+    std::swap(core.point_a, core.point_b);
+    return core;
+  }
+  if (strip_b) {
+    return segment_rectangle_distance(a0, a1, rect(b0, b1, half_b));
+  }
+  return segment_segment_distance(a0, a1, b0, b1);
+}
+
+/* The distance segments pi and pj must keep apart: the sum of their radii, or their cores'
+ * distance at rest when that is less (GroupVolumes). */
+float kept_distance(const PairContext &ctx, const int32_t pi, const int32_t pj,
+                    const float radii_sum)
+{
+  if (ctx.rest_positions.is_empty()) {
+    return radii_sum;
+  }
+  const Span<vec3> rest = ctx.rest_positions;
+  const float at_rest = group_cores(rest[pi], rest[pi + 1], segment_half_width(ctx, pi),
+                                    rest[pj], rest[pj + 1], segment_half_width(ctx, pj))
+                            .distance;
+  return std::min(radii_sum, at_rest);
+}
+
 /* Whether segments pi < pj of one strand can meet only by the strand folding back: the
  * strand between them (pj − pi − 1 segments, about as long as the two) is longer than their
  * radii and half widths together. A thick group's skeleton (level of detail) is not pushed
@@ -604,49 +643,43 @@ bool test_strip_pair(const PairContext &ctx, const int32_t pi, const int32_t pj,
     return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
   };
   const float radii_sum = radius(pi) + radius(pj);
-  const bool strip_i = half_i != vec3(0.0f), strip_j = half_j != vec3(0.0f);
-  /* The cores' closest points with the nodes at (a0, a1), (b0, b1). */
-  const auto cores = [&](const vec3 &a0, const vec3 &a1, const vec3 &b0, const vec3 &b1) {
-    const auto rect = [](const vec3 &p0, const vec3 &p1, const vec3 &half) {
-      return RectSS::from_segment(p0, p1, half, 2.0f * glm::length(half), 0.0f);
-    };
-    if (strip_i && strip_j) {
-      return rectangle_rectangle_distance(rect(a0, a1, half_i), rect(b0, b1, half_j));
-    }
-    if (strip_i) {
-      CoreDistance core = segment_rectangle_distance(b0, b1, rect(a0, a1, half_i));
-      std::swap(core.point_a, core.point_b);
-      return core;
-    }
-    return segment_rectangle_distance(a0, a1, rect(b0, b1, half_j));
+  /* The cores' closest points with the nodes at (p0, p1), (q0, q1). */
+  const auto cores = [&](const vec3 &p0, const vec3 &p1, const vec3 &q0, const vec3 &q1) {
+    return group_cores(p0, p1, half_i, q0, q1, half_j);
   };
   const Span<vec3> x = ctx.x;
   const vec3 a0 = x[pi], a1 = x[pi + 1], b0 = x[pj], b1 = x[pj + 1];
   CoreDistance core = cores(a0, a1, b0, b1);
+  const float kept = kept_distance(ctx, pi, pj, radii_sum);
   /* The side the pair came from, when it came within reach during the substep. */
   bool crossed = false;
   vec3 n(0.0f);
-  if (ctx.start.sweeps() && sweeps > 0.0f && radii_sum > 0.0f) {
+  float depth = kept - core.distance;
+  if (ctx.start.sweeps() && sweeps > 0.0f && kept > 0.0f) {
     const vec3 A0 = ctx.start[pi], A1 = ctx.start[pi + 1];
     const vec3 B0 = ctx.start[pj], B1 = ctx.start[pj + 1];
-    const int samples = int(std::min(64.0f, std::ceil(sweeps / radii_sum)));
+    const int samples = int(std::min(64.0f, std::ceil(sweeps / kept)));
     CoreDistance last = cores(A0, A1, B0, B1);
-    for (int k = 1; k <= samples && last.distance >= radii_sum; k++) {
+    for (int k = 1; k <= samples && last.distance >= kept; k++) {
       const float tau = float(k) / float(samples);
       const CoreDistance now = k == samples ?
                                    core :
                                    cores(glm::mix(A0, a0, tau), glm::mix(A1, a1, tau),
                                          glm::mix(B0, b0, tau), glm::mix(B1, b1, tau));
-      if (now.distance < radii_sum) {
+      if (now.distance < kept) {
         n = (last.point_b - last.point_a) / last.distance;
         /* Still within reach of that side at the end: pushed back to it. */
-        crossed = radii_sum - glm::dot(core.point_b - core.point_a, n) > 0.0f;
+        depth = kept - glm::dot(core.point_b - core.point_a, n);
+        crossed = depth > 0.0f;
       }
       last = now;
     }
   }
-  if (!crossed && core.distance >= radii_sum) {
+  if (!crossed && core.distance >= kept) {
     return false;
+  }
+  if (!crossed) {
+    depth = kept - core.distance;
   }
   core.s = closest_segment_parameter(core.point_a, a0, a1);
   core.t = closest_segment_parameter(core.point_b, b0, b1);
@@ -655,14 +688,10 @@ bool test_strip_pair(const PairContext &ctx, const int32_t pi, const int32_t pj,
   const bool parallel = !crossed &&
                         glm::dot(n1, n1) <= ctx.sin_parallel * ctx.sin_parallel *
                                                 glm::dot(da, da) * glm::dot(db, db);
-  float depth = radii_sum - core.distance;
-  if (crossed) {
-    depth = radii_sum - glm::dot(core.point_b - core.point_a, n);
-  }
-  else if (core.distance > 1e-4f * radii_sum) {
+  if (!crossed && core.distance > 1e-4f * radii_sum) {
     n = (core.point_b - core.point_a) / core.distance;
   }
-  else {
+  else if (!crossed) {
     /* Cores that meet (and met at the start): apart along the lines' common normal, toward
      * the side where b's middle lies (or from a's middle to b's). */
     const vec3 apart = 0.5f * (b0 + b1 - a0 - a1);
@@ -671,7 +700,7 @@ bool test_strip_pair(const PairContext &ctx, const int32_t pi, const int32_t pj,
     const float length = glm::length(n);
     n = length > 0.0f ? n / length : vec3(0.0f);
   }
-  respond(ctx, pi, pj, core, radii_sum, parallel, crossed, n, depth, r_c);
+  respond(ctx, pi, pj, core, kept, parallel, crossed, n, depth, r_c);
   return true;
 }
 
@@ -698,6 +727,14 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
   const float ri = copy_i ? copy_i->origin.w : radius(pi);
   const float rj = copy_j ? copy_j->origin.w : radius(pj);
   const float radii_sum = ri + rj;
+  /* The distance to keep (kept_distance), found when first needed. */
+  float kept_value = -1.0f;
+  const auto kept = [&]() {
+    if (kept_value < 0.0f) {
+      kept_value = kept_distance(ctx, pi, pj, radii_sum);
+    }
+    return kept_value;
+  };
   const vec3 da = a1 - a0, db = b1 - b0;
   const vec3 n1 = glm::cross(da, db);
   const float f1 = glm::dot(b0 - a0, n1);
@@ -747,7 +784,8 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
       }
       const float tau = lo + (hi - lo) * (f_lo / (f_lo - f_hi));
       at(tau, p0, p1, q0, q1);
-      crossed = segment_segment_distance(p0, p1, q0, q1).distance < radii_sum;
+      const float touching = segment_segment_distance(p0, p1, q0, q1).distance;
+      crossed = touching < radii_sum && touching < kept();
     }
   }
   if (!crossed) {
@@ -776,8 +814,11 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
   if (!crossed && core.distance >= radii_sum) {
     return false;
   }
+  if (!crossed && core.distance >= kept()) {
+    return false;
+  }
   vec3 n(0.0f);
-  float depth = radii_sum - core.distance;
+  float depth = kept() - core.distance;
   if (ctx.params != nullptr && !parallel) {
     /* §5.3: each moves half the overlap, in opposite directions along the vector between the
      * closest points (s1 → s2). A pair that passed through each other goes back to the sides
@@ -786,7 +827,7 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
     const float nn_len = std::sqrt(nn1);
     if (crossed) {
       n = (side0 > 0.0f ? 1.0f : -1.0f) * n1 / nn_len;
-      depth = radii_sum - glm::dot(core.point_b - core.point_a, n);
+      depth = kept() - glm::dot(core.point_b - core.point_a, n);
     }
     else if (core.distance > 1e-4f * radii_sum) {
       n = (core.point_b - core.point_a) / core.distance;
@@ -796,7 +837,7 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
       n = (side >= 0.0f ? 1.0f : -1.0f) * n1 / nn_len;
     }
   }
-  respond(ctx, pi, pj, core, radii_sum, parallel, crossed, n, depth, r_c);
+  respond(ctx, pi, pj, core, kept(), parallel, crossed, n, depth, r_c);
   return true;
 }
 
@@ -865,8 +906,9 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                            std::vector<SegmentContact> &r_contacts,
                            const Span<vec3> start_positions, const Span<vec3> velocities,
                            const SweptSphereParams *params, const float h,
-                           const Span<vec3> half_widths)
+                           const GroupVolumes &groups)
 {
+  const Span<vec3> half_widths = groups.half_widths;
   r_contacts.clear();
   g.candidate_pairs_num = 0;
   PairContext ctx;
@@ -881,6 +923,7 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
   ctx.start.v = params != nullptr && start_positions.is_empty() ? velocities : Span<vec3>();
   ctx.sin_parallel = params != nullptr ? std::sin(params->near_parallel_angle) : 0.0f;
   ctx.half_widths = half_widths;
+  ctx.rest_positions = groups.rest_positions;
   if (!build_grid(curve_offsets, positions, ctx.start, radii, default_radius, half_widths, g)) {
     return;
   }
@@ -1211,16 +1254,20 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
   HairHairStats stats;
   const MutableSpan<vec3> x = state.positions_wo;
   const MutableSpan<vec3> v = state.velocities_wo;
-  /* Strips' half widths turn with the head (its rotation: they keep their length). */
-  g.half_widths_wo.resize(size_t(state.strip_half_widths_hs.size()));
-  if (!g.half_widths_wo.empty()) {
-    const mat3 turn = HeadPose::from_matrix(state.head_to_world).rotation_matrix();
-    for (size_t p = 0; p < g.half_widths_wo.size(); p++) {
-      g.half_widths_wo[p] = turn * state.strip_half_widths_hs[int64_t(p)];
+  /* Strips' half widths and the rest positions turn with the head (its rotation: lengths and
+   * distances stay). */
+  const mat3 turn = HeadPose::from_matrix(state.head_to_world).rotation_matrix();
+  const auto turned = [&](const Span<vec3> from, std::vector<vec3> &to) {
+    to.resize(size_t(from.size()));
+    for (size_t p = 0; p < to.size(); p++) {
+      to[p] = turn * from[int64_t(p)];
     }
-  }
+  };
+  turned(state.strip_half_widths_hs, g.half_widths_wo);
+  turned(state.rest_positions_hs, g.rest_positions_wo);
+  const GroupVolumes groups{g.half_widths_wo, g.rest_positions_wo};
   find_segment_contacts(state.curve_offsets, x, state.radii, params.thickness, false, g, contacts,
-                        state.start_positions_wo, v, &params, state.h, g.half_widths_wo);
+                        state.start_positions_wo, v, &params, state.h, groups);
   stats.pairs_num = int64_t(contacts.size());
   stats.candidates_num = g.candidate_pairs_num;
   for (const SegmentContact &c : contacts) {
@@ -1242,6 +1289,7 @@ HairHairStats resolve_hair_hair(const SweptSphereParams &params, const SubstepSt
   ctx.params = &params;
   ctx.sin_parallel = std::sin(params.near_parallel_angle);
   ctx.half_widths = g.half_widths_wo;
+  ctx.rest_positions = g.rest_positions_wo;
   size_t active = contacts.size(); /* the pairs the last pass kept, at the front */
   for (int iteration = 1; iteration < response_iterations; iteration++) {
     /* Each pair the last pass kept is re-tested (in parallel, into a copy), then those kept

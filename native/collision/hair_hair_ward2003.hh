@@ -76,7 +76,9 @@ struct SegmentGridScratch {
   std::vector<float> entry_sweep;      /* its segment_sweep */
   std::vector<int32_t> entry_segment;  /* its segment */
   std::vector<uint8_t> entry_strip;    /* it is a strip's (with half widths; else empty) */
-  std::vector<vec3> half_widths_wo;    /* resolve_hair_hair: per point, the strips' */
+  /* resolve_hair_hair: per point, the strips' half widths and the rest positions turned with
+   * the head (GroupVolumes). */
+  std::vector<vec3> half_widths_wo, rest_positions_wo;
   std::vector<uint32_t> cell_offsets;  /* per column: its first entry */
   std::vector<uint32_t> fill;          /* counting sort: per column, the next entry */
   std::vector<int32_t> big_segments;   /* segments whose box is wider than a column */
@@ -102,6 +104,17 @@ struct SegmentGridScratch {
   int64_t candidate_pairs_num = 0; /* pairs whose boxes overlap, tested */
 };
 
+/* What the segments of level-of-detail skeletons stand for (SubstepState), per point, in one
+ * frame turned with the head: a strip's half width (empty, or zero: not a strip), and where
+ * the point lies at rest (empty: no rest allowance). Two segments closer at rest than their
+ * radii (the groups of a dense groom overlap where their strands interleave) may stay as
+ * close as they were at rest: the pass keeps groups from moving into each other, it does not
+ * pull the groom apart. */
+struct GroupVolumes {
+  Span<vec3> half_widths;
+  Span<vec3> rest_positions;
+};
+
 /* Every pair of segments whose LSSs intersect at `positions` (overlap < 0), but a strand's
  * neighbouring segments, in the order of their first, then second points (so independent of
  * the thread count and of the grid). Radii per point (a segment takes the mean of its two
@@ -111,15 +124,14 @@ struct SegmentGridScratch {
  * each other on the way (continuous detection: each segment sweeps linearly from its start;
  * without them but with `params`, from x − h v).
  * The contacts carry §5.3's response computed from `velocities` (may be empty when `params`
- * is null; then no response is computed). `half_widths` (per point, world; empty: none):
- * a segment whose nodes have a non-zero one is a strip's, a rectangle swept sphere (§5.2;
- * SubstepState::strip_half_widths_hs), tested at `positions` only. */
+ * is null; then no response is computed). With `groups`, a segment whose nodes have a
+ * non-zero half width is a strip's, a rectangle swept sphere (§5.2). */
 void find_segment_contacts(Span<int32_t> curve_offsets, Span<vec3> positions, Span<float> radii,
                            float default_radius, bool different_strands_only,
                            SegmentGridScratch &scratch, std::vector<SegmentContact> &r_contacts,
                            Span<vec3> start_positions = {}, Span<vec3> velocities = {},
                            const SweptSphereParams *params = nullptr, float h = 0.0f,
-                           Span<vec3> half_widths = {});
+                           const GroupVolumes &groups = {});
 
 /* Segment pairs of different strands closer than the sum of their radii: the `crossings`
  * report of a frame. */

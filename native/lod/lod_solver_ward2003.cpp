@@ -75,17 +75,22 @@ void LodSolver::add_pass(SubstepPass *const pass, const float strand_radius)
   const int32_t n = hierarchy_.skeleton_points_num();
   const int64_t nodes = hierarchy_.nodes_num();
   std::vector<float> radii(size_t(nodes * n));
-  std::vector<vec3> half_widths_hs(size_t(nodes * n));
+  std::vector<vec3> half_widths_hs(size_t(nodes * n)), rest_hs(size_t(nodes * n));
   const mat3 world_to_head = glm::transpose(rest_pose_.rotation_matrix());
   for (int64_t node = 0; node < nodes; node++) {
     const Span<float> spread = hierarchy_.spread(node);
     const Span<vec3> half_width = hierarchy_.half_width(node);
+    const Span<vec3> rest = hierarchy_.rest_skeleton(node);
     for (int32_t k = 0; k < n; k++) {
-      radii[size_t(node * n + k)] = strand_radius + spread[k];
-      half_widths_hs[size_t(node * n + k)] = world_to_head * half_width[k];
+      const size_t i = size_t(node * n + k);
+      radii[i] = strand_radius + spread[k];
+      half_widths_hs[i] = world_to_head * half_width[k];
+      rest_hs[i] = world_to_head * (rest[k] - rest_pose_.translation);
     }
   }
-  solver_->set_pass_volumes(radii, half_widths_hs);
+  /* Groups overlap at rest where their strands interleave: they may stay as close as that
+   * (GroupVolumes). */
+  solver_->set_pass_volumes(radii, half_widths_hs, rest_hs);
   solver_->add_pass(pass);
 }
 

@@ -66,7 +66,8 @@ class LodSolver {
    * its group's swept-sphere volume (Ward & Lin 2003 §5.2): a strip segment a rectangle swept
    * sphere as wide as the strip, a cluster or strand group segment a line swept sphere; the
    * radius `strand_radius` (m, a single strand's) plus the group's spread
-   * (LodHierarchy::spread). The pass must outlive the solver. */
+   * (LodHierarchy::spread). Groups closer at rest than that (their strands interleave) may
+   * stay as close as at rest (GroupVolumes). The pass must outlive the solver. */
   void add_pass(SubstepPass *pass, float strand_radius);
   /* Milliseconds the pass named `name` took during the last step. */
   double pass_ms(const std::string &name) const { return solver_->pass_ms(name); }

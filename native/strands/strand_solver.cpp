@@ -205,13 +205,17 @@ void StrandSolver::set_stepped(const Span<uint8_t> stepped, const Span<uint8_t> 
 }
 
 void StrandSolver::set_pass_volumes(const Span<float> radii,
-                                    const Span<vec3> strip_half_widths_hs)
+                                    const Span<vec3> strip_half_widths_hs,
+                                    const Span<vec3> rest_positions_hs)
 {
-  assert(radii.is_empty() || radii.size() == int64_t(rest_positions_wo_.size()));
-  assert(strip_half_widths_hs.is_empty() ||
-         strip_half_widths_hs.size() == int64_t(rest_positions_wo_.size()));
+  const int64_t points = int64_t(rest_positions_wo_.size());
+  assert(radii.is_empty() || radii.size() == points);
+  assert(strip_half_widths_hs.is_empty() || strip_half_widths_hs.size() == points);
+  assert(rest_positions_hs.is_empty() || rest_positions_hs.size() == points);
+  (void)points;
   pass_radii_.assign(radii.begin(), radii.end());
   pass_half_widths_hs_.assign(strip_half_widths_hs.begin(), strip_half_widths_hs.end());
+  pass_rest_hs_.assign(rest_positions_hs.begin(), rest_positions_hs.end());
 }
 
 void StrandSolver::gather_pass_view()
@@ -223,6 +227,7 @@ void StrandSolver::gather_pass_view()
   view.start_positions.resize(points);
   view.radii.resize(pass_radii_.empty() ? 0 : points);
   view.half_widths_hs.resize(pass_half_widths_hs_.empty() ? 0 : points);
+  view.rest_hs.resize(pass_rest_hs_.empty() ? 0 : points);
   parallel_for(int64_t(view.curves.size()), 256, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       const IndexRange from = curve_points(curve_offsets_, view.curves[size_t(i)]);
@@ -235,6 +240,9 @@ void StrandSolver::gather_pass_view()
       }
       if (!view.half_widths_hs.empty()) {
         std::copy_n(&pass_half_widths_hs_[size_t(from.start)], n, &view.half_widths_hs[to]);
+      }
+      if (!view.rest_hs.empty()) {
+        std::copy_n(&pass_rest_hs_[size_t(from.start)], n, &view.rest_hs[to]);
       }
     }
   });
@@ -746,6 +754,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
         state.start_positions_wo = pass_view_.start_positions;
         state.radii = pass_view_.radii;
         state.strip_half_widths_hs = pass_view_.half_widths_hs;
+        state.rest_positions_hs = pass_view_.rest_hs;
       }
       else {
         state.curve_offsets = curve_offsets_;
@@ -754,6 +763,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
         state.start_positions_wo = positions_start_;
         state.radii = pass_radii_;
         state.strip_half_widths_hs = pass_half_widths_hs_;
+        state.rest_positions_hs = pass_rest_hs_;
       }
       for (size_t p = 0; p < passes_.size(); p++) {
         const auto start = std::chrono::steady_clock::now();

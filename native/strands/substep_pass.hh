@@ -34,6 +34,10 @@ struct SubstepState {
    * swept sphere (Ward & Lin 2003 §5.2), its rectangle the segment widened by it both ways.
    * Empty, or zero: a line swept sphere. */
   Span<vec3> strip_half_widths_hs;
+  /* m, per point: where it lies at rest, in the frame of strip_half_widths_hs (the head's,
+   * unscaled): segments closer at rest than their radii may stay that close (hair–hair's
+   * GroupVolumes). Empty: none. */
+  Span<vec3> rest_positions_hs;
   /* The head at the end of the substep (grids that move with the head use it). */
   mat4 head_to_world{1.0f};
 };
