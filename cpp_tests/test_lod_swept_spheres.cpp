@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "collision/hair_hair_ward2003.hh"
+#include "collision/ssv_object_ward2003.hh"
 #include "lod/hierarchy_ward2003.hh"
 #include "lod/lod_solver_ward2003.hh"
 #include "lod_scenes.hh"
@@ -200,4 +201,51 @@ TEST(LodSweptSpheres, HairHairKeepsSheetsApartAtEveryLevel)
     EXPECT_LT(off.tip_x, 0.06f);
     EXPECT_GT(on.tip_x, 0.06f);
   }
+}
+
+/* A skeleton may stay as near the body as it was at rest (SubstepState::rest_clearances): a
+ * strand draped over a sphere 1 mm above it, its swept spheres 5 mm thick (a group's), stays
+ * about 1 mm above it under swept-sphere body collision; without the clearances the pass
+ * lifts it to 5 mm. */
+TEST(LodSweptSpheres, ASkeletonStaysAsNearTheBodyAsAtRest)
+{
+  const auto colliders = head_colliders(0.1f);
+  strand_scenes::Groom groom;
+  for (int i = 0; i <= 10; i++) {
+    const float angle = 0.1f * float(i); /* 1 cm segments along a great circle */
+    groom.positions.push_back(0.101f * vec3(std::sin(angle), 0.0f, std::cos(angle)));
+  }
+  groom.offsets.push_back(int32_t(groom.positions.size()));
+  const auto height = [&](const Span<vec3> positions) {
+    float sum = 0.0f;
+    for (int i = 1; i <= 10; i++) {
+      sum += (glm::length(positions[i]) - 0.1f) / 10.0f;
+    }
+    return sum;
+  };
+  float heights[2];
+  for (const bool with_clearances : {false, true}) {
+    StrandSolver solver(groom.offsets, groom.positions, mat4(1.0f), {}, StrandParams());
+    SweptSphereParams params;
+    params.body_collision = BodyCollision::SweptSpheres;
+    SsvObjectPass pass(colliders.get(), params);
+    PassVolumes volumes;
+    volumes.radii.assign(groom.positions.size(), 0.005f);
+    if (with_clearances) {
+      for (const vec3 &p : groom.positions) {
+        volumes.rest_clearances.push_back(
+            std::max(colliders->collider(0).exact().signed_distance(p), 0.0f));
+      }
+    }
+    solver.set_pass_volumes(volumes);
+    solver.add_pass(&pass);
+    for (int frame = 0; frame < 24; frame++) {
+      solver.step(1.0f / 24.0f, mat4(1.0f));
+    }
+    heights[with_clearances] = height(solver.positions());
+  }
+  std::printf("mean height over the sphere: %.2f mm with rest clearances, %.2f mm without\n",
+              1e3f * heights[1], 1e3f * heights[0]);
+  EXPECT_LT(heights[1], 0.002f);
+  EXPECT_GT(heights[0], 0.004f);
 }

@@ -284,13 +284,18 @@ void SsvObjectPass::apply(const SubstepState &state)
             original_base = x[k + 1];
             /* A strip's segment meets the body as the line swept sphere around its
              * rectangle swept sphere (its half width added): no part of the strip stays in. */
-            const float r =
+            float r =
                 (state.radii.is_empty() ? params_.thickness :
                                           0.5f * (state.radii[k] + state.radii[k + 1])) +
                 (state.strip_half_widths_hs.is_empty() ?
                      0.0f :
                      glm::length(0.5f * (state.strip_half_widths_hs[k] +
                                          state.strip_half_widths_hs[k + 1])));
+            /* No farther out than its nodes were at rest (a group's skeleton nearer the body
+             * than its radius, where its strands rest on it). */
+            if (!state.rest_clearances.is_empty()) {
+              r = std::min(r, std::min(state.rest_clearances[k], state.rest_clearances[k + 1]));
+            }
             /* The base moved (the previous segment was pushed): keep this segment's length. */
             if (a != base_before) {
               const vec3 dir = x[k + 1] - a;

@@ -29,7 +29,9 @@
  *   it (§5.4).
  * A strip's segment (level of detail) is tested as the line swept sphere that bounds its
  * rectangle swept sphere (radius plus half width), which keeps the guarantee below for the
- * whole strip; the exact rectangle–triangle response is not done.
+ * whole strip; the exact rectangle–triangle response is not done. With rest clearances
+ * (SubstepState) a segment is held no farther out than its nodes lay at rest, up to its
+ * radius: a group's skeleton rests nearer the body than the group is thick.
  * Order (§5.5): after hair–hair (a soft constraint), this pass is the hard one: no segment
  * ends the pass inside a body. */
 #include <memory>

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/parallel.hh"
 #include "groom/groom.hh"
@@ -68,30 +69,59 @@ void LodSolver::set_colliders(const ColliderSet *colliders, const CollisionParam
 {
   colliders_ = colliders;
   solver_->set_colliders(colliders, params);
+  if (!solver_->passes().is_empty()) {
+    update_pass_volumes();
+  }
 }
 
 void LodSolver::add_pass(SubstepPass *const pass, const float strand_radius)
 {
-  const int32_t n = hierarchy_.skeleton_points_num();
-  const int64_t nodes = hierarchy_.nodes_num();
-  std::vector<float> radii(size_t(nodes * n));
-  std::vector<vec3> half_widths_hs(size_t(nodes * n)), rest_hs(size_t(nodes * n));
-  const mat3 world_to_head = glm::transpose(rest_pose_.rotation_matrix());
-  for (int64_t node = 0; node < nodes; node++) {
-    const Span<float> spread = hierarchy_.spread(node);
-    const Span<vec3> half_width = hierarchy_.half_width(node);
-    const Span<vec3> rest = hierarchy_.rest_skeleton(node);
-    for (int32_t k = 0; k < n; k++) {
-      const size_t i = size_t(node * n + k);
-      radii[i] = strand_radius + spread[k];
-      half_widths_hs[i] = world_to_head * half_width[k];
-      rest_hs[i] = world_to_head * (rest[k] - rest_pose_.translation);
-    }
-  }
-  /* Groups overlap at rest where their strands interleave: they may stay as close as that
-   * (GroupVolumes). */
-  solver_->set_pass_volumes(radii, half_widths_hs, rest_hs);
+  strand_radius_ = strand_radius;
+  update_pass_volumes();
   solver_->add_pass(pass);
+}
+
+void LodSolver::update_pass_volumes()
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  const int64_t points = hierarchy_.nodes_num() * n;
+  PassVolumes volumes;
+  volumes.radii.resize(size_t(points));
+  volumes.strip_half_widths_hs.resize(size_t(points));
+  volumes.rest_positions_hs.resize(size_t(points));
+  if (colliders_ != nullptr && colliders_->colliders_num() > 0) {
+    volumes.rest_clearances.resize(size_t(points));
+  }
+  const mat3 world_to_head = glm::transpose(rest_pose_.rotation_matrix());
+  parallel_for(hierarchy_.nodes_num(), 64, [&](const IndexRange range) {
+    for (int64_t node = range.start; node < range.one_after_last(); node++) {
+      const Span<float> spread = hierarchy_.spread(node);
+      const Span<vec3> half_width = hierarchy_.half_width(node);
+      const Span<vec3> rest = hierarchy_.rest_skeleton(node);
+      for (int32_t k = 0; k < n; k++) {
+        const size_t i = size_t(node * n + k);
+        volumes.radii[i] = strand_radius_ + spread[k];
+        volumes.strip_half_widths_hs[i] = world_to_head * half_width[k];
+        /* Groups overlap at rest where their strands interleave: they may stay as close as
+         * that (GroupVolumes). */
+        volumes.rest_positions_hs[i] = world_to_head * (rest[k] - rest_pose_.translation);
+        if (!volumes.rest_clearances.empty()) {
+          /* And a skeleton may stay as near the body as it was at rest (the colliders where
+           * they are now: the groom's rest pose). */
+          float clearance = std::numeric_limits<float>::max();
+          for (int64_t c = 0; c < colliders_->colliders_num(); c++) {
+            const Collider &collider = colliders_->collider(c);
+            const mat4 &to_world = collider.object_to_world();
+            const vec3 p = transform_point(glm::inverse(to_world), rest[k]);
+            clearance = std::min(clearance, collider.exact().signed_distance(p) *
+                                                uniform_scale(to_world));
+          }
+          volumes.rest_clearances[i] = std::max(clearance, 0.0f);
+        }
+      }
+    }
+  });
+  solver_->set_pass_volumes(std::move(volumes));
 }
 
 void LodSolver::set_active(const int32_t node, const bool active)

@@ -60,14 +60,21 @@ class LodSolver {
    * bodies that occlude hair (§6.1). nullptr: neither. */
   void set_colliders(const ColliderSet *colliders, const CollisionParams &params);
   /* Only the bodies that occlude hair (when the skeletons collide by a pass instead). */
-  void set_occluders(const ColliderSet *occluders) { colliders_ = occluders; }
+  void set_occluders(const ColliderSet *occluders)
+  {
+    colliders_ = occluders;
+    if (!solver_->passes().is_empty()) {
+      update_pass_volumes();
+    }
+  }
   /* Runs `pass` after every substep over the active skeletons (not over one kept a frame
    * longer to measure a switch: it would meet the skeleton that replaced it), each seen as
    * its group's swept-sphere volume (Ward & Lin 2003 §5.2): a strip segment a rectangle swept
    * sphere as wide as the strip, a cluster or strand group segment a line swept sphere; the
    * radius `strand_radius` (m, a single strand's) plus the group's spread
    * (LodHierarchy::spread). Groups closer at rest than that (their strands interleave) may
-   * stay as close as at rest (GroupVolumes). The pass must outlive the solver. */
+   * stay as close as at rest (GroupVolumes), and as near the colliders as at rest
+   * (SubstepState::rest_clearances). The pass must outlive the solver. */
   void add_pass(SubstepPass *pass, float strand_radius);
   /* Milliseconds the pass named `name` took during the last step. */
   double pass_ms(const std::string &name) const { return solver_->pass_ms(name); }
@@ -143,6 +150,8 @@ class LodSolver {
    * head where the last step left it; a node whose nodes are current and whose state this
    * leaves unchanged bit for bit is left alone. */
   void take_state(int32_t node, Span<vec2> angles, Span<vec2> rates);
+  /* The volumes the passes see (add_pass), from strand_radius_ and the colliders. */
+  void update_pass_volumes();
 
   LodHierarchy hierarchy_;
   LodParams lod_params_;
@@ -150,6 +159,7 @@ class LodSolver {
   HeadPose rest_pose_;
   mat3 head_rotation_{1.0f}; /* since rest, at the end of the last step */
   const ColliderSet *colliders_ = nullptr;
+  float strand_radius_ = 0.0f; /* m, add_pass's */
 
   std::unique_ptr<StrandSolver> solver_;
   /* Per node: stepped by the next step. */

@@ -204,48 +204,52 @@ void StrandSolver::set_stepped(const Span<uint8_t> stepped, const Span<uint8_t> 
   group_strands();
 }
 
-void StrandSolver::set_pass_volumes(const Span<float> radii,
-                                    const Span<vec3> strip_half_widths_hs,
-                                    const Span<vec3> rest_positions_hs)
+void StrandSolver::set_pass_volumes(PassVolumes volumes)
 {
-  const int64_t points = int64_t(rest_positions_wo_.size());
-  assert(radii.is_empty() || radii.size() == points);
-  assert(strip_half_widths_hs.is_empty() || strip_half_widths_hs.size() == points);
-  assert(rest_positions_hs.is_empty() || rest_positions_hs.size() == points);
+  const size_t points = rest_positions_wo_.size();
+  assert(volumes.radii.empty() || volumes.radii.size() == points);
+  assert(volumes.strip_half_widths_hs.empty() || volumes.strip_half_widths_hs.size() == points);
+  assert(volumes.rest_positions_hs.empty() || volumes.rest_positions_hs.size() == points);
+  assert(volumes.rest_clearances.empty() || volumes.rest_clearances.size() == points);
   (void)points;
-  pass_radii_.assign(radii.begin(), radii.end());
-  pass_half_widths_hs_.assign(strip_half_widths_hs.begin(), strip_half_widths_hs.end());
-  pass_rest_hs_.assign(rest_positions_hs.begin(), rest_positions_hs.end());
+  pass_volumes_ = std::move(volumes);
 }
+
+namespace {
+
+/* The points of `curves` (their new offsets `offsets`) out of a per point array, or nothing
+ * from an empty one. */
+template<typename T>
+void gather_points(const Span<int32_t> curve_offsets, const Span<int64_t> curves,
+                   const Span<int32_t> offsets, const std::vector<T> &from, std::vector<T> &to)
+{
+  to.resize(from.empty() ? 0 : size_t(offsets[offsets.size() - 1]));
+  if (from.empty()) {
+    return;
+  }
+  parallel_for(curves.size(), 256, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      const IndexRange points = curve_points(curve_offsets, curves[i]);
+      std::copy_n(&from[size_t(points.start)], points.size, &to[size_t(offsets[i])]);
+    }
+  });
+}
+
+}  // namespace
 
 void StrandSolver::gather_pass_view()
 {
   PassView &view = pass_view_;
-  const size_t points = size_t(view.offsets.back());
-  view.positions.resize(points);
-  view.velocities.resize(points);
-  view.start_positions.resize(points);
-  view.radii.resize(pass_radii_.empty() ? 0 : points);
-  view.half_widths_hs.resize(pass_half_widths_hs_.empty() ? 0 : points);
-  view.rest_hs.resize(pass_rest_hs_.empty() ? 0 : points);
-  parallel_for(int64_t(view.curves.size()), 256, [&](const IndexRange range) {
-    for (int64_t i = range.start; i < range.one_after_last(); i++) {
-      const IndexRange from = curve_points(curve_offsets_, view.curves[size_t(i)]);
-      const size_t to = size_t(view.offsets[size_t(i)]), n = size_t(from.size);
-      std::copy_n(&positions_wo_[size_t(from.start)], n, &view.positions[to]);
-      std::copy_n(&velocities_wo_[size_t(from.start)], n, &view.velocities[to]);
-      std::copy_n(&positions_start_[size_t(from.start)], n, &view.start_positions[to]);
-      if (!view.radii.empty()) {
-        std::copy_n(&pass_radii_[size_t(from.start)], n, &view.radii[to]);
-      }
-      if (!view.half_widths_hs.empty()) {
-        std::copy_n(&pass_half_widths_hs_[size_t(from.start)], n, &view.half_widths_hs[to]);
-      }
-      if (!view.rest_hs.empty()) {
-        std::copy_n(&pass_rest_hs_[size_t(from.start)], n, &view.rest_hs[to]);
-      }
-    }
-  });
+  const auto gather = [&](const auto &from, auto &to) {
+    gather_points(curve_offsets_, view.curves, view.offsets, from, to);
+  };
+  gather(positions_wo_, view.positions);
+  gather(velocities_wo_, view.velocities);
+  gather(positions_start_, view.start_positions);
+  gather(pass_volumes_.radii, view.volumes.radii);
+  gather(pass_volumes_.strip_half_widths_hs, view.volumes.strip_half_widths_hs);
+  gather(pass_volumes_.rest_positions_hs, view.volumes.rest_positions_hs);
+  gather(pass_volumes_.rest_clearances, view.volumes.rest_clearances);
 }
 
 void StrandSolver::scatter_pass_view()
@@ -752,18 +756,14 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
         state.positions_wo = pass_view_.positions;
         state.velocities_wo = pass_view_.velocities;
         state.start_positions_wo = pass_view_.start_positions;
-        state.radii = pass_view_.radii;
-        state.strip_half_widths_hs = pass_view_.half_widths_hs;
-        state.rest_positions_hs = pass_view_.rest_hs;
+        state.set_volumes(pass_view_.volumes);
       }
       else {
         state.curve_offsets = curve_offsets_;
         state.positions_wo = positions_wo_;
         state.velocities_wo = velocities_wo_;
         state.start_positions_wo = positions_start_;
-        state.radii = pass_radii_;
-        state.strip_half_widths_hs = pass_half_widths_hs_;
-        state.rest_positions_hs = pass_rest_hs_;
+        state.set_volumes(pass_volumes_);
       }
       for (size_t p = 0; p < passes_.size(); p++) {
         const auto start = std::chrono::steady_clock::now();

@@ -152,11 +152,9 @@ class StrandSolver {
   int64_t pins_num() const { return int64_t(pins_.size()); }
   void clear_passes();
   Span<SubstepPass *> passes() const { return passes_; }
-  /* What the passes see of each strand's swept-sphere volume (SubstepState): per point, its
-   * radius in m, half a strip's width across it (zero: not a strip) and its rest position,
-   * both in the head's unscaled frame. Any may be empty (the default): none given. */
-  void set_pass_volumes(Span<float> radii, Span<vec3> strip_half_widths_hs,
-                        Span<vec3> rest_positions_hs);
+  /* What the passes see of each strand's swept-sphere volume (SubstepState): per point, each
+   * array empty or one per point. */
+  void set_pass_volumes(PassVolumes volumes);
   /* Milliseconds the pass named `name` took during the last step (all substeps); 0 for a
    * name no pass has. */
   double pass_ms(const std::string &name) const;
@@ -408,16 +406,14 @@ class StrandSolver {
   std::vector<vec3> velocities_before_;
   std::vector<vec3> positions_start_; /* the nodes at the start of a substep (with passes) */
   std::vector<double> pass_ms_;
-  std::vector<float> pass_radii_;         /* set_pass_volumes, per point */
-  std::vector<vec3> pass_half_widths_hs_; /* set_pass_volumes, per point */
-  std::vector<vec3> pass_rest_hs_;        /* set_pass_volumes, per point */
+  PassVolumes pass_volumes_;
   /* What the passes see when some strands are not (set_stepped): those strands' curves in
    * order, their offsets, and their per point arrays gathered before and scattered after. */
   struct PassView {
     std::vector<int64_t> curves;
     std::vector<int32_t> offsets;
-    std::vector<vec3> positions, velocities, start_positions, half_widths_hs, rest_hs;
-    std::vector<float> radii;
+    std::vector<vec3> positions, velocities, start_positions;
+    PassVolumes volumes;
   };
   PassView pass_view_;
   bool pass_view_used_ = false;

@@ -9,11 +9,21 @@
  * buffers and calls kernels that are free functions over spans; it must be deterministic for
  * any thread count. */
 #include <cstdint>
+#include <vector>
 
 #include "core/math.hh"
 #include "core/span.hh"
 
 namespace hairdyn {
+
+/* Per point, what the nodes stand for in the passes beyond a strand's own thickness (level of
+ * detail's groups; SubstepState's fields of the same names). Each empty when not given. */
+struct PassVolumes {
+  std::vector<float> radii;
+  std::vector<vec3> strip_half_widths_hs;
+  std::vector<vec3> rest_positions_hs;
+  std::vector<float> rest_clearances;
+};
 
 struct SubstepState {
   float h = 0.0f;    /* s, the substep's length */
@@ -38,8 +48,20 @@ struct SubstepState {
    * unscaled): segments closer at rest than their radii may stay that close (hair–hair's
    * GroupVolumes). Empty: none. */
   Span<vec3> rest_positions_hs;
+  /* m, per point: how far it lay outside the colliders at rest; a body collision pass keeps a
+   * segment no farther out than its nodes were then, up to its radius (a group's skeleton
+   * lies closer to the body than its radius where its strands rest on it). Empty: none. */
+  Span<float> rest_clearances;
   /* The head at the end of the substep (grids that move with the head use it). */
   mat4 head_to_world{1.0f};
+
+  void set_volumes(const PassVolumes &volumes)
+  {
+    radii = volumes.radii;
+    strip_half_widths_hs = volumes.strip_half_widths_hs;
+    rest_positions_hs = volumes.rest_positions_hs;
+    rest_clearances = volumes.rest_clearances;
+  }
 };
 
 class SubstepPass {
