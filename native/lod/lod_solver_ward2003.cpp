@@ -488,8 +488,8 @@ void LodSolver::step(const float frame_dt, const mat4 &head_to_world, const mat4
     starting_ = false;
   }
   /* Only the active skeletons, and on a switch the ones that drove strands at the last frame
-   * (place_strands measures the jump between the two at this frame), are stepped; each
-   * solver runs them in parallel. */
+   * (place_strands measures the jump between the two at this frame), are stepped, in
+   * parallel; the passes see only the active ones. */
   for (int64_t node = 0; node < hierarchy_.nodes_num(); node++) {
     stepped_[size_t(node)] = active_[size_t(node)] || shown_[size_t(node)];
     current_[size_t(node)] = stepped_[size_t(node)];

@@ -115,8 +115,6 @@ class LodSolver {
    * when it was last stepped or placed (frames: last stepped). */
   Span<vec3> skeleton(int64_t node) const;
   Span<mat3> frames(int64_t node) const;
-  /* The strand solver of every skeleton: node `node` is its curve `node`. */
-  const StrandSolver &solver() const { return *solver_; }
   /* A node's segment angles and rates (points 1 .. n-1 of its curve; slot 0 is the root). */
   Span<vec2> angles(int64_t node) const;
   Span<vec2> angular_velocities(int64_t node) const;
