@@ -526,11 +526,12 @@ struct PairContext {
 };
 
 /* The contact of segments pi < pj whose cores are `core` apart (its s and t: the closest
- * points' parameters along them), and §5.3's response when ctx has parameters: near-parallel
- * pairs take the average of their velocities, the others move apart along the unit vector n
- * (first to second) by `depth` in all, half each. */
+ * points' parameters along them) and must keep `kept` apart (kept_distance), and §5.3's
+ * response when ctx has parameters: near-parallel pairs take the average of their
+ * velocities, the others move apart along the unit vector n (first to second) by `depth` in
+ * all, half each. */
 void respond(const PairContext &ctx, const int32_t pi, const int32_t pj, const CoreDistance &core,
-             const float radii_sum, const bool parallel, const bool crossed, const vec3 &n,
+             const float kept, const bool parallel, const bool crossed, const vec3 &n,
              const float depth, SegmentContact &r_c)
 {
   r_c.first = pi;
@@ -539,7 +540,7 @@ void respond(const PairContext &ctx, const int32_t pi, const int32_t pj, const C
   r_c.crossed = crossed;
   r_c.parallel = parallel;
   r_c.move = r_c.dv_first = r_c.dv_second = vec3(0.0f);
-  r_c.overlap = core.distance - radii_sum;
+  r_c.overlap = core.distance - kept;
   if (ctx.params == nullptr) {
     return;
   }
@@ -564,6 +565,12 @@ void respond(const PairContext &ctx, const int32_t pi, const int32_t pj, const C
     r_c.dv_first = (0.5f * ctx.params->push_strength * approach) * n;
     r_c.dv_second = -r_c.dv_first;
   }
+}
+
+/* Segment p's swept-sphere radius: the mean of its nodes'. */
+inline float segment_radius(const PairContext &ctx, const int32_t p)
+{
+  return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
 }
 
 /* Segment p's half width across the strip it belongs to (zero: not a strip). */
@@ -618,9 +625,7 @@ float kept_distance(const PairContext &ctx, const int32_t pi, const int32_t pj,
 bool folded_back(const PairContext &ctx, const int32_t pi, const int32_t pj)
 {
   const auto reach = [&](const int32_t p) {
-    return (ctx.radii.is_empty() ? ctx.default_radius :
-                                   0.5f * (ctx.radii[p] + ctx.radii[p + 1])) +
-           glm::length(segment_half_width(ctx, p));
+    return segment_radius(ctx, p) + glm::length(segment_half_width(ctx, p));
   };
   const float between = float(pj - pi - 1) * 0.5f *
                         (glm::length(ctx.x[pi + 1] - ctx.x[pi]) +
@@ -639,10 +644,7 @@ bool test_strip_pair(const PairContext &ctx, const int32_t pi, const int32_t pj,
                      const vec3 &half_i, const vec3 &half_j, const float sweeps,
                      SegmentContact &r_c)
 {
-  const auto radius = [&](const int32_t p) {
-    return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
-  };
-  const float radii_sum = radius(pi) + radius(pj);
+  const float radii_sum = segment_radius(ctx, pi) + segment_radius(ctx, pj);
   /* The cores' closest points with the nodes at (p0, p1), (q0, q1). */
   const auto cores = [&](const vec3 &p0, const vec3 &p1, const vec3 &q0, const vec3 &q1) {
     return group_cores(p0, p1, half_i, q0, q1, half_j);
@@ -718,14 +720,11 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
     }
   }
   const Span<vec3> x = ctx.x;
-  const auto radius = [&](const int32_t p) {
-    return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
-  };
   /* The nodes from the grid's copies when given (the same values, nearer in memory). */
   const vec3 a0 = copy_i ? vec3(copy_i->origin) : x[pi], a1 = copy_i ? vec3(copy_i->tip) : x[pi + 1];
   const vec3 b0 = copy_j ? vec3(copy_j->origin) : x[pj], b1 = copy_j ? vec3(copy_j->tip) : x[pj + 1];
-  const float ri = copy_i ? copy_i->origin.w : radius(pi);
-  const float rj = copy_j ? copy_j->origin.w : radius(pj);
+  const float ri = copy_i ? copy_i->origin.w : segment_radius(ctx, pi);
+  const float rj = copy_j ? copy_j->origin.w : segment_radius(ctx, pj);
   const float radii_sum = ri + rj;
   /* The distance to keep (kept_distance), found when first needed. */
   float kept_value = -1.0f;
