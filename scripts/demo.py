@@ -57,7 +57,8 @@ def hair_material():
     """The Principled Hair BSDF (Chiang 2016 where the host has the choice), brown by
     melanin: one material for the groom and everything made from it."""
     material = bpy.data.materials.new("hairdyn_demo_hair")
-    material.use_nodes = True
+    if material.node_tree is None:  # newer Blender gives every material its node tree
+        material.use_nodes = True
     nodes = material.node_tree.nodes
     nodes.clear()
     hair = nodes.new("ShaderNodeBsdfHairPrincipled")

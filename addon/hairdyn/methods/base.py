@@ -17,7 +17,8 @@ def node_material(name, build):
     material = bpy.data.materials.get(name)
     if material is None:
         material = bpy.data.materials.new(name)
-        material.use_nodes = True
+        if material.node_tree is None:  # newer Blender gives every material its node tree
+            material.use_nodes = True
         tree = material.node_tree
         tree.nodes.clear()
         build(tree.nodes, tree.links)
