@@ -249,3 +249,49 @@ TEST(LodSweptSpheres, ASkeletonStaysAsNearTheBodyAsAtRest)
   EXPECT_LT(heights[1], 0.002f);
   EXPECT_GT(heights[0], 0.004f);
 }
+
+/* With the body collided by swept spheres only, the maps are off (set_colliders(nullptr)) and
+ * the colliders still hide hair (set_occluders, §6.1): about as many strands come out at the
+ * coarsest level as with the colliders set (the hair, no longer held off the head by the
+ * maps, hangs a little differently), none without them, and the skeletons make no map
+ * contacts. */
+TEST(LodSweptSpheres, OccludersWithoutMapsStillHideHair)
+{
+  LodParams params;
+  params.strips_num = 48;
+  params.strip_splits = 1;
+  params.cluster_min_radius = 0.02f;
+  params.distance_near = 2.0f; /* by distance everything wants the finest level */
+  params.distance_far = 3.0f;
+  params.velocity_slow = 50.0f;
+  params.velocity_fast = 100.0f;
+  const CapGroom groom(300, 10);
+  const auto colliders = head_colliders();
+  const mat4 camera = camera_view_projection(vec3(0.0f, -0.35f, 0.05f));
+  enum { Maps, Occluders, Neither };
+  int64_t coarsest[3] = {0, 0, 0}, contacts[3] = {0, 0, 0};
+  for (const int setup : {Maps, Occluders, Neither}) {
+    LodSolver solver(groom.offsets, groom.positions, {}, groom.normals, mat4(1.0f),
+                     StrandParams(), WindParams(), params);
+    solver.set_colliders(setup == Maps ? colliders.get() : nullptr, CollisionParams());
+    if (setup == Occluders) {
+      solver.set_occluders(colliders.get());
+    }
+    for (int frame = 0; frame < solver.hierarchy().max_depth() + 3; frame++) {
+      solver.step(1.0f / 24.0f, mat4(1.0f), camera);
+      contacts[setup] += solver.contacts_num();
+    }
+    for (const int32_t node : solver.strand_nodes()) {
+      coarsest[setup] += solver.hierarchy().depth(node) == 0;
+    }
+  }
+  std::printf("strands at the coarsest level: %lld with the colliders, %lld with occluders only, "
+              "%lld with neither\n",
+              (long long)coarsest[Maps], (long long)coarsest[Occluders],
+              (long long)coarsest[Neither]);
+  EXPECT_GT(coarsest[Maps], 30) << "some strands must be hidden behind the head";
+  EXPECT_NEAR(double(coarsest[Occluders]), double(coarsest[Maps]), 0.1 * double(coarsest[Maps]));
+  EXPECT_EQ(coarsest[Neither], 0);
+  EXPECT_GT(contacts[Maps], 0);
+  EXPECT_EQ(contacts[Occluders], 0);
+}
