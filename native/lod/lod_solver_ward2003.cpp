@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "core/parallel.hh"
 #include "groom/groom.hh"
@@ -93,6 +94,14 @@ void LodSolver::update_pass_volumes()
     volumes.rest_clearances.resize(size_t(points));
   }
   const mat3 world_to_head = glm::transpose(rest_pose_.rotation_matrix());
+  /* Each collider's world-to-object transform and scale, for the clearances. */
+  std::vector<std::pair<mat4, float>> to_objects;
+  for (int64_t c = 0; c < (volumes.rest_clearances.empty() ? 0 : colliders_->colliders_num());
+       c++)
+  {
+    const mat4 &to_world = colliders_->collider(c).object_to_world();
+    to_objects.emplace_back(glm::inverse(to_world), uniform_scale(to_world));
+  }
   parallel_for(hierarchy_.nodes_num(), 64, [&](const IndexRange range) {
     for (int64_t node = range.start; node < range.one_after_last(); node++) {
       const Span<float> spread = hierarchy_.spread(node);
@@ -109,12 +118,11 @@ void LodSolver::update_pass_volumes()
           /* And a skeleton may stay as near the body as it was at rest (the colliders where
            * they are now: the groom's rest pose). */
           float clearance = std::numeric_limits<float>::max();
-          for (int64_t c = 0; c < colliders_->colliders_num(); c++) {
-            const Collider &collider = colliders_->collider(c);
-            const mat4 &to_world = collider.object_to_world();
-            const vec3 p = transform_point(glm::inverse(to_world), rest[k]);
-            clearance = std::min(clearance, collider.exact().signed_distance(p) *
-                                                uniform_scale(to_world));
+          for (size_t c = 0; c < to_objects.size(); c++) {
+            const vec3 p = transform_point(to_objects[c].first, rest[k]);
+            clearance = std::min(clearance, colliders_->collider(int64_t(c)).exact()
+                                                    .signed_distance(p) *
+                                                to_objects[c].second);
           }
           volumes.rest_clearances[i] = std::max(clearance, 0.0f);
         }

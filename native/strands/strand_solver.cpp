@@ -201,6 +201,7 @@ void StrandSolver::set_stepped(const Span<uint8_t> stepped, const Span<uint8_t> 
     pass_view_.offsets.push_back(pass_view_.offsets.back() +
                                  int32_t(curve_points(curve_offsets_, curve).size));
   }
+  gather_view_volumes();
   group_strands();
 }
 
@@ -213,6 +214,7 @@ void StrandSolver::set_pass_volumes(PassVolumes volumes)
   assert(volumes.rest_clearances.empty() || volumes.rest_clearances.size() == points);
   (void)points;
   pass_volumes_ = std::move(volumes);
+  gather_view_volumes();
 }
 
 namespace {
@@ -240,12 +242,22 @@ void gather_points(const Span<int32_t> curve_offsets, const Span<int64_t> curves
 void StrandSolver::gather_pass_view()
 {
   PassView &view = pass_view_;
+  gather_points(curve_offsets_, view.curves, view.offsets, positions_wo_, view.positions);
+  gather_points(curve_offsets_, view.curves, view.offsets, velocities_wo_, view.velocities);
+  gather_points(curve_offsets_, view.curves, view.offsets, positions_start_,
+                view.start_positions);
+}
+
+void StrandSolver::gather_view_volumes()
+{
+  PassView &view = pass_view_;
+  if (!pass_view_used_) {
+    view.volumes = {};
+    return;
+  }
   const auto gather = [&](const auto &from, auto &to) {
     gather_points(curve_offsets_, view.curves, view.offsets, from, to);
   };
-  gather(positions_wo_, view.positions);
-  gather(velocities_wo_, view.velocities);
-  gather(positions_start_, view.start_positions);
   gather(pass_volumes_.radii, view.volumes.radii);
   gather(pass_volumes_.strip_half_widths_hs, view.volumes.strip_half_widths_hs);
   gather(pass_volumes_.rest_positions_hs, view.volumes.rest_positions_hs);

@@ -408,7 +408,8 @@ class StrandSolver {
   std::vector<double> pass_ms_;
   PassVolumes pass_volumes_;
   /* What the passes see when some strands are not (set_stepped): those strands' curves in
-   * order, their offsets, and their per point arrays gathered before and scattered after. */
+   * order, their offsets, their nodes gathered before the passes and scattered after, and
+   * their volumes, gathered when the view or the volumes change. */
   struct PassView {
     std::vector<int64_t> curves;
     std::vector<int32_t> offsets;
@@ -418,6 +419,7 @@ class StrandSolver {
   PassView pass_view_;
   bool pass_view_used_ = false;
   void gather_pass_view();
+  void gather_view_volumes();
   void scatter_pass_view();
 
   /* The head at the end of the last step, and its velocity over that step. */
