@@ -13,7 +13,7 @@ using namespace hairdyn;
 
 TEST(LcpKernels, KernelIntegratesToOne)
 {
-  for (const float h : {0.003f, 0.011f, 0.5f}) {
+  for (const float h : { 0.003f, 0.011f, 0.5f }) {
     /* ∫ W(r, h) 4π r² dr over [0, 2h], midpoint rule in double. */
     const int steps = 20000;
     double sum = 0.0;
@@ -31,12 +31,18 @@ TEST(LcpKernels, KernelIsContinuousAndGradientMatchesFiniteDifference)
 {
   const float h = 0.01f;
   const float w_h = sph_kernel(h, h);
-  EXPECT_NEAR(sph_kernel(h * (1.0f - 1e-5f), h) / w_h, sph_kernel(h * (1.0f + 1e-5f), h) / w_h, 1e-4f);
-  for (const float r : {0.002f, 0.007f, 0.012f, 0.018f}) {
+  EXPECT_NEAR(sph_kernel(h * (1.0f - 1e-5f), h) / w_h, sph_kernel(h * (1.0f + 1e-5f), h) / w_h,
+              1e-4f);
+  for (const float r : { 0.002f, 0.007f, 0.012f, 0.018f }) {
     const float eps = 1e-6f;
     const float fd = (sph_kernel(r + eps, h) - sph_kernel(r - eps, h)) / (2.0f * eps);
     EXPECT_NEAR(sph_kernel_derivative(r, h), fd, 2e-3f * std::abs(fd) + 1.0f) << r;
     EXPECT_LE(sph_kernel_derivative(r, h), 0.0f);
+    /* The second derivative of the implicit pressure's pair springs. */
+    const float eps2 = 1e-5f;
+    const float fd2 =
+        (sph_kernel_derivative(r + eps2, h) - sph_kernel_derivative(r - eps2, h)) / (2.0f * eps2);
+    EXPECT_NEAR(sph_kernel_second_derivative(r, h), fd2, 1e-2f * std::abs(fd2)) << r;
   }
   /* ∂W/∂x_i points from j toward i's side: moving i toward j raises W. */
   const vec3 x_ij(0.008f, 0.0f, 0.0f);
@@ -94,7 +100,7 @@ TEST(LcpKernels, GridFindsExactlyTheBruteForceNeighboursWithoutACap)
   SpatialGrid grid;
   grid.build(points, radius);
   NeighborList list;
-  for (const int threads : {1, 2}) {
+  for (const int threads : { 1, 2 }) {
     set_thread_num(threads);
     find_neighbors(grid, points, radius, true, list);
     for (size_t i = 0; i < points.size(); i += 7) {

@@ -218,7 +218,7 @@ TEST(LcpImplicitSprings, HangingChainReachesItsStaticStretchAtAHugeTimeStep)
       chain.velocities[size_t(i)].z -= dt * g; /* gravity, explicit */
     }
     const ImplicitSprings::Result result = springs.step(
-        chain.connections, chain.positions, alpha_k, 0.005f, chain.masses, chain.is_fixed, dt,
+        chain.connections, chain.positions, alpha_k, 0.005f, chain.masses, chain.is_fixed, dt, nullptr,
         chain.velocities);
     ASSERT_LE(result.iterations, 100);
     for (int i = 0; i <= n; i++) {
@@ -266,7 +266,7 @@ TEST(LcpImplicitSprings, EnergyNeverGrows)
     const double start = previous;
     for (int step = 0; step < 50; step++) {
       springs.step(chain.connections, chain.positions, alpha_k, 0.0f, chain.masses,
-                   chain.is_fixed, dt, chain.velocities);
+                   chain.is_fixed, dt, nullptr, chain.velocities);
       for (int i = 0; i <= n; i++) {
         chain.positions[size_t(i)] += dt * chain.velocities[size_t(i)];
       }

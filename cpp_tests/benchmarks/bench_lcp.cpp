@@ -1,8 +1,9 @@
 /* LCP (Bando 2003) throughput: simulated frames per second (1/24 s frames) for 2,000 and
  * 20,000 particles of back hair under gravity with a swaying head, on 1 and 2 threads.
- * Arguments: target particle count, threads, implicit springs (1) or explicit (0). The
- * counter "substeps" is the substeps per frame, "cg_per_substep" the conjugate-gradient
- * iterations of the implicit springs per substep. */
+ * Arguments: target particle count, threads, implicit springs (1) or explicit (0), implicit
+ * pressure (1) or explicit (0). The counter "substeps" is the substeps per frame,
+ * "cg_per_substep" the conjugate-gradient iterations of the implicit springs per substep,
+ * "searches_per_frame" the neighbour searches a frame (core/spatial_grid.hh's Verlet list). */
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -25,6 +26,7 @@ static void BM_LcpFrame(benchmark::State &state)
   params.max_length = 0.2f;
   params.root_depth = 0.02f;
   params.implicit_springs = state.range(2) != 0;
+  params.implicit_pressure = state.range(3) != 0;
   const LcpParticles particles = sample(down_facing_rectangle(0.2f, 0.1f, 20, 10), params);
   LcpSolver solver(params, particles, mat4(1.0f));
   /* Settle so the measured frames are the steady state. */
@@ -32,6 +34,7 @@ static void BM_LcpFrame(benchmark::State &state)
     solver.step(1.0f / 24.0f, mat4(1.0f));
   }
   int frame = 0;
+  const int64_t searches_before = solver.neighbor_searches();
   double substeps = 0.0, iterations = 0.0;
   for (auto _ : state) {
     const float angle = 0.3f * std::sin(float(frame++) * 0.2f);
@@ -43,17 +46,21 @@ static void BM_LcpFrame(benchmark::State &state)
   state.counters["particles"] = double(solver.particles_num());
   state.counters["pairs"] = double(solver.pairs_num());
   state.counters["substeps"] = substeps / double(state.iterations());
+  state.counters["searches_per_frame"] =
+      double(solver.neighbor_searches() - searches_before) / double(state.iterations());
   state.counters["cg_per_substep"] = substeps > 0.0 ? iterations / substeps : 0.0;
-  state.counters["frames_per_s"] = benchmark::Counter(double(state.iterations()),
-                                                      benchmark::Counter::kIsRate);
+  state.counters["frames_per_s"] =
+      benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
   set_thread_num(0);
 }
 BENCHMARK(BM_LcpFrame)
-    ->Args({2000, 1, 1})
-    ->Args({2000, 2, 1})
-    ->Args({20000, 2, 1})
-    ->Args({2000, 2, 0})
-    ->Args({20000, 2, 0})
+    ->Args({ 2000, 1, 1, 0 })
+    ->Args({ 2000, 2, 1, 0 })
+    ->Args({ 20000, 2, 1, 0 })
+    ->Args({ 2000, 2, 1, 1 })
+    ->Args({ 20000, 2, 1, 1 })
+    ->Args({ 2000, 2, 0, 0 })
+    ->Args({ 20000, 2, 0, 0 })
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(2.0);

@@ -103,4 +103,37 @@ void find_neighbors(const SpatialGrid &grid, const Span<vec3> query_points, cons
   });
 }
 
+bool VerletNeighbors::update(const Span<vec3> points, const float radius, const float skin)
+{
+  bool valid = int64_t(built_at_.size()) == points.size() && radius == radius_ && skin == skin_;
+  if (valid) {
+    const float limit_sq = 0.25f * skin * skin;
+    /* Written so that a NaN position fails the test and forces a rebuild. */
+    valid = parallel_reduce(
+        points.size(), 4096, true,
+        [&](const IndexRange range) {
+          for (int64_t i = range.start; i < range.one_after_last(); i++) {
+            const vec3 d = points[i] - built_at_[size_t(i)];
+            if (!(glm::dot(d, d) <= limit_sq)) {
+              return false;
+            }
+          }
+          return true;
+        },
+        [](const bool a, const bool b) {
+          return a && b;
+        });
+  }
+  if (valid) {
+    return false;
+  }
+  grid_.build(points, radius + skin);
+  find_neighbors(grid_, points, radius + skin, true, list_);
+  built_at_.assign(points.begin(), points.end());
+  radius_ = radius;
+  skin_ = skin;
+  builds_++;
+  return true;
+}
+
 }  // namespace hairdyn

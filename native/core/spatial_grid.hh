@@ -91,4 +91,28 @@ struct NeighborList {
 void find_neighbors(const SpatialGrid &grid, Span<vec3> query_points, float radius,
                     bool exclude_self, NeighborList &r_list);
 
+/* The neighbours of a moving point set within `radius` of each other, kept as a Verlet list
+ * (Verlet 1967): found within radius + skin and reused until some point has moved more than
+ * skin / 2 since, so that no pair closer than `radius` can be missing (two points close by at
+ * most twice the largest displacement). Rows may hold points up to radius + skin away: users
+ * test the distance. */
+class VerletNeighbors {
+ public:
+  /* The list for `points` (the grid's own points, i not its own neighbour), rebuilt when a
+   * point has moved too far, the point count or the radii changed, or after invalidate().
+   * True when it was rebuilt. */
+  bool update(Span<vec3> points, float radius, float skin);
+  void invalidate() { built_at_.clear(); }
+  const NeighborList &list() const { return list_; }
+  /* Rebuilds since the list was made (for the benchmarks' counters). */
+  int64_t builds() const { return builds_; }
+
+ private:
+  SpatialGrid grid_;
+  NeighborList list_;
+  std::vector<vec3> built_at_;
+  float radius_ = 0.0f, skin_ = 0.0f;
+  int64_t builds_ = 0;
+};
+
 }  // namespace hairdyn

@@ -42,6 +42,20 @@ inline float sph_kernel_derivative(const float r, const float h)
   return 0.0f;
 }
 
+/* d²W/dr² of eq. 2: negative near the centre (q < 2/3), positive in the tail. */
+inline float sph_kernel_second_derivative(const float r, const float h)
+{
+  const float q = r / h;
+  const float norm = 1.0f / (4.0f * pi_f * h * h * h * h * h);
+  if (q < 1.0f) {
+    return norm * (-12.0f + 18.0f * q);
+  }
+  if (q < 2.0f) {
+    return norm * 6.0f * (2.0f - q);
+  }
+  return 0.0f;
+}
+
 /* ∂/∂x_i W(‖x_j − x_i‖, h) for x_ij = x_j − x_i (the gradient used in eq. 16). */
 inline vec3 sph_kernel_gradient_i(const vec3 &x_ij, const float h)
 {

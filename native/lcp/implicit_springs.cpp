@@ -9,8 +9,42 @@ namespace hairdyn {
 
 static constexpr int64_t grain = 1024;
 
-double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3> r_product) const
+void ImplicitSprings::pressure_rates(const Span<vec3> d)
 {
+  const DensityJacobian &jacobian = *pressure_;
+  pressure_rates_.resize(size_t(d.size()));
+  parallel_for(d.size(), grain, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      float rate = 0.0f; /* (J d)_i = Σ_j g_ij · (d_i − d_j) */
+      for (int32_t e = jacobian.offsets[size_t(i)]; e < jacobian.offsets[size_t(i) + 1]; e++) {
+        rate += glm::dot(jacobian.gradients[size_t(e)], d[i] - d[jacobian.partners[size_t(e)]]);
+      }
+      pressure_rates_[size_t(i)] = jacobian.kappa[size_t(i)] * rate;
+    }
+  });
+}
+
+vec3 ImplicitSprings::pressure_row(const Span<vec3> d, const int64_t i) const
+{
+  const DensityJacobian &jacobian = *pressure_;
+  const float t_i = pressure_rates_[size_t(i)];
+  vec3 row(0.0f); /* (Jᵀ t)_i = Σ_j g_ij (t_i + (m_i/m_j) t_j), and the pair springs */
+  for (int32_t e = jacobian.offsets[size_t(i)]; e < jacobian.offsets[size_t(i) + 1]; e++) {
+    const int32_t j = jacobian.partners[size_t(e)];
+    const vec3 &g = jacobian.gradients[size_t(e)];
+    const vec3 d_ij = d[i] - d[j];
+    row += g * (t_i + masses_[i] / masses_[j] * pressure_rates_[size_t(j)] +
+                jacobian.along[size_t(e)] * glm::dot(g, d_ij)) +
+           jacobian.across[size_t(e)] * d_ij;
+  }
+  return dt_ * dt_ * row;
+}
+
+double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3> r_product)
+{
+  if (pressure_ != nullptr) {
+    pressure_rates(d);
+  }
   const std::vector<int32_t> &offsets = connections_->particle_offsets;
   /* Returns dᵀ A d as well: one pass for the product and the dot product CG needs. */
   return parallel_sum(d.size(), grain, [&](const IndexRange range) {
@@ -28,6 +62,9 @@ double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3>
         const vec3 d_ij = d_i - d[e.partner];
         y += e.along * glm::dot(e.axis, d_ij) * e.axis + e.across * d_ij;
       }
+      if (pressure_ != nullptr) {
+        y += pressure_row(d, i);
+      }
       r_product[i] = y;
       dot += double(glm::dot(d_i, y));
     }
@@ -35,22 +72,27 @@ double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3>
   });
 }
 
-ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
-                                              const Span<vec3> positions,
-                                              const Span<float> alpha_k,
-                                              const float damping_time, const Span<float> masses,
-                                              const Span<uint8_t> is_fixed, const float dt,
-                                              const MutableSpan<vec3> r_velocities)
+ImplicitSprings::Result ImplicitSprings::step(
+    const LcpConnections &connections, const Span<vec3> positions, const Span<float> alpha_k,
+    const float damping_time, const Span<float> masses, const Span<uint8_t> is_fixed,
+    const float dt, const DensityJacobian *pressure, const MutableSpan<vec3> r_velocities)
 {
   const int64_t n = positions.size();
   const int64_t pairs_num = connections.size();
   connections_ = &connections;
   masses_ = masses;
   is_fixed_ = is_fixed;
+  pressure_ = pressure;
+  dt_ = dt;
+  if (pressure != nullptr) {
+    pressure_rates(r_velocities); /* for −Δt² K_p v */
+  }
   axis_.resize(size_t(pairs_num));
   along_.resize(size_t(pairs_num));
   across_.resize(size_t(pairs_num));
-  for (std::vector<vec3> *buffer : {&rhs_, &dv_, &residual_, &preconditioned_, &direction_, &product_}) {
+  for (std::vector<vec3> *buffer :
+       { &rhs_, &dv_, &residual_, &preconditioned_, &direction_, &product_ })
+  {
     buffer->resize(size_t(n));
   }
   inverse_diagonal_.resize(size_t(n));
@@ -112,9 +154,25 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
         /* K (v_i − v_j) of this pair. */
         stiff_v -= ak * ((1.0f - lateral) * glm::dot(axis, v_ij) * axis + lateral * v_ij);
         diagonal += along_[size_t(p)] * glm::outerProduct(axis, axis) + mat3(across_[size_t(p)]);
-        entries_[size_t(k)] = {j, along_[size_t(p)], across_[size_t(p)], axis};
+        entries_[size_t(k)] = { j, along_[size_t(p)], across_[size_t(p)], axis };
       }
       rhs_[size_t(i)] = dt * (force - dt * stiff_v);
+      if (pressure != nullptr) {
+        rhs_[size_t(i)] -= pressure_row(r_velocities, i);
+        /* K_p's diagonal block: κ_i G_i G_iᵀ + Σ_j κ_j (m_i/m_j)² g_ij g_ijᵀ, G_i = Σ_j g_ij. */
+        vec3 own(0.0f);
+        mat3 others(0.0f);
+        for (int32_t e = pressure->offsets[size_t(i)]; e < pressure->offsets[size_t(i) + 1]; e++) {
+          const int32_t j = pressure->partners[size_t(e)];
+          const vec3 &g = pressure->gradients[size_t(e)];
+          own += g;
+          const float scale = masses[i] / masses[j];
+          others += (pressure->kappa[size_t(j)] * scale * scale + pressure->along[size_t(e)]) *
+                        glm::outerProduct(g, g) +
+                    mat3(pressure->across[size_t(e)]);
+        }
+        diagonal += dt * dt * (pressure->kappa[size_t(i)] * glm::outerProduct(own, own) + others);
+      }
       inverse_diagonal_[size_t(i)] = glm::inverse(diagonal);
     }
   });
@@ -127,7 +185,7 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
     float max_correction = 0; /* max_i ‖P_i⁻¹ r_i‖ */
   };
   const auto combine = [](const Residual &a, const Residual &b) {
-    return Residual{a.rz + b.rz, std::max(a.max_correction, b.max_correction)};
+    return Residual{ a.rz + b.rz, std::max(a.max_correction, b.max_correction) };
   };
   /* r_i −= alpha q_i, z_i = P_i⁻¹ r_i, and the sums. */
   const auto update_residual = [&](const IndexRange range, const float alpha) {
@@ -144,9 +202,12 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
   dv_ = guess_;
   multiply_dot(dv_, product_); /* r = b − A Δv₀ */
   residual_ = rhs_;
-  Residual residual = parallel_reduce(n, grain, Residual{}, [&](const IndexRange range) {
-    return update_residual(range, 1.0f);
-  }, combine);
+  Residual residual = parallel_reduce(
+      n, grain, Residual{},
+      [&](const IndexRange range) {
+        return update_residual(range, 1.0f);
+      },
+      combine);
   direction_ = preconditioned_;
   while (residual.max_correction > velocity_tolerance && result.iterations < max_iterations) {
     const double pq = multiply_dot(direction_, product_);
@@ -154,12 +215,15 @@ ImplicitSprings::Result ImplicitSprings::step(const LcpConnections &connections,
       break;
     }
     const float alpha = float(residual.rz / pq);
-    const Residual next = parallel_reduce(n, grain, Residual{}, [&](const IndexRange range) {
-      for (int64_t i = range.start; i < range.one_after_last(); i++) {
-        dv_[size_t(i)] += alpha * direction_[size_t(i)];
-      }
-      return update_residual(range, alpha);
-    }, combine);
+    const Residual next = parallel_reduce(
+        n, grain, Residual{},
+        [&](const IndexRange range) {
+          for (int64_t i = range.start; i < range.one_after_last(); i++) {
+            dv_[size_t(i)] += alpha * direction_[size_t(i)];
+          }
+          return update_residual(range, alpha);
+        },
+        combine);
     const float beta = float(next.rz / residual.rz);
     residual = next;
     parallel_for(n, grain, [&](const IndexRange range) {

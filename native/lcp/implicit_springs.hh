@@ -14,11 +14,21 @@
  * dropped). The matrix is then symmetric positive definite and is solved by conjugate
  * gradients with a block-Jacobi (3 × 3) preconditioner, warm-started from the previous
  * step's solution. The step is stable for any Δt: the springs' stiffness no longer sets the
- * number of substeps. */
+ * number of substeps.
+ *
+ * The attraction/repulsion of eq. 16 may join the same step: its force is applied
+ * explicitly by the caller before (in the velocities given), and its stiffness K_p = Jᵀ κ J
+ * (lcp/interactions_bando2003.hh's DensityJacobian) goes into the matrix and, as −Δt² K_p v,
+ * into the right-hand side. That is backward Euler for the pressure too: with a = Δt M⁻¹ f_p
+ * already in v, (M + Δt² K_p)(a + Δv) = Δt f_p − Δt² K_p v₀ is (M + Δt² K_p) Δv =
+ * −Δt² K_p (v₀ + a). A state where all forces balance is then a fixed point whatever Δt (a
+ * pressure solved apart from the springs would bias the balance by M (M + Δt² K)⁻¹), and
+ * the pressure's sound speed no longer sets the substeps. */
 #include <vector>
 
 #include "core/math.hh"
 #include "core/span.hh"
+#include "lcp/interactions_bando2003.hh"
 #include "lcp/springs_bando2003.hh"
 
 namespace hairdyn {
@@ -32,25 +42,34 @@ class ImplicitSprings {
   };
 
   /* Adds to r_velocities the velocity change of one backward-Euler step of `dt` under the
-   * damped springs (coefficients α_ij k_ij, damping time γ). Particles flagged in `is_fixed`
-   * keep their velocity (zero in the head's frame) and hold their partners' springs. */
+   * damped springs (coefficients α_ij k_ij, damping time γ), and the pressure's stiffness
+   * when `pressure` is given. Particles flagged in `is_fixed` keep their velocity (zero in the
+   * head's frame) and hold their partners' springs. */
   Result step(const LcpConnections &connections, Span<vec3> positions, Span<float> alpha_k,
               float damping_time, Span<float> masses, Span<uint8_t> is_fixed, float dt,
-              MutableSpan<vec3> r_velocities);
+              const DensityJacobian *pressure, MutableSpan<vec3> r_velocities);
 
   /* Forgets the previous step's solution, the next solve's first guess. */
   void reset() { guess_.clear(); }
 
-  /* m/s: the conjugate gradients stop when no particle's velocity correction is larger;
-   * and their iteration cap. */
+  /* m/s: the conjugate gradients stop when no particle's velocity correction is larger (the
+   * LCP solver sets it from h₂ and the step); and their iteration cap. */
   float velocity_tolerance = 1e-5f;
   int max_iterations = 200;
 
  private:
   /* r_product = (M + Δt C + Δt² K) d for the pair blocks of the last step(). */
-  double multiply_dot(Span<vec3> d, MutableSpan<vec3> r_product) const;
+  double multiply_dot(Span<vec3> d, MutableSpan<vec3> r_product);
+  /* pressure_rates_ = κ J d, the first half of K_p d. */
+  void pressure_rates(Span<vec3> d);
+  /* Row i of Δt² K_p d (Jᵀ pressure_rates_ and the pair springs), the pressure's part of the
+   * product; pressure_rates(d) first. */
+  vec3 pressure_row(Span<vec3> d, int64_t i) const;
 
   const LcpConnections *connections_ = nullptr;
+  const DensityJacobian *pressure_ = nullptr;
+  float dt_ = 0.0f;
+  std::vector<float> pressure_rates_;
   Span<float> masses_;
   Span<uint8_t> is_fixed_;
   /* Pair block Δt C_ij + Δt² K_ij = along x̂x̂ᵀ + across I. */

@@ -1,5 +1,8 @@
 #include "lcp/interactions_bando2003.hh"
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/parallel.hh"
 #include "core/sph_kernels.hh"
 
@@ -13,8 +16,13 @@ void compute_density(const Span<vec3> positions, const Span<float> masses,
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       /* Bando 2003, eq. 1 (with j = i: W(0, h)). */
       float rho = masses[i] * sph_kernel(0.0f, h);
+      const float support_sq = 4.0f * h * h;
       for (const int32_t j : neighbors.neighbors_of(i)) {
-        rho += masses[j] * sph_kernel(glm::length(positions[j] - positions[i]), h);
+        const vec3 d = positions[j] - positions[i];
+        const float r_sq = glm::dot(d, d);
+        if (r_sq < support_sq) { /* The list may hold particles beyond the support. */
+          rho += masses[j] * sph_kernel(std::sqrt(r_sq), h);
+        }
       }
       r_density[i] = rho;
     }
@@ -38,15 +46,17 @@ void accumulate_hair_interactions(const Span<vec3> positions, const Span<vec3> v
       for (const int32_t j : neighbors.neighbors_of(i)) {
         const vec3 x_ij = positions[j] - positions[i];
         const float r = glm::length(x_ij);
-        if (r <= 0.0f) {
+        if (!(r > 0.0f && r < 2.0f * h)) { /* The list may hold particles beyond 2h. */
           continue;
         }
         if (settings.attraction_repulsion) {
           /* Bando 2003, eq. 16 with P = k_a (ρ − ρ₀). */
-          const float pressure_j = settings.pressure_stiffness * (density[j] - settings.rest_density);
-          force -= masses[i] * masses[j] *
-                   (pressure_i / (density[i] * density[i]) + pressure_j / (density[j] * density[j])) *
-                   sph_kernel_gradient_i(x_ij, h);
+          const float pressure_j =
+              settings.pressure_stiffness * (density[j] - settings.rest_density);
+          force -=
+              masses[i] * masses[j] *
+              (pressure_i / (density[i] * density[i]) + pressure_j / (density[j] * density[j])) *
+              sph_kernel_gradient_i(x_ij, h);
         }
         if (!settings.collision && !settings.friction) {
           continue;
@@ -87,6 +97,65 @@ void accumulate_hair_interactions(const Span<vec3> positions, const Span<vec3> v
       r_forces[i] += force;
       r_damped_forces[i] += damped_force;
       r_damping[i] += damping;
+    }
+  });
+}
+
+void compute_density_jacobian(const Span<vec3> positions, const Span<float> masses,
+                              const Span<float> density, const NeighborList &neighbors,
+                              const float h, const float pressure_stiffness,
+                              const float rest_density, DensityJacobian &r_jacobian)
+{
+  const int64_t n = positions.size();
+  const float support_sq = 4.0f * h * h;
+  const auto in_support = [&](const int64_t i, const int32_t j) {
+    const vec3 d = positions[j] - positions[i];
+    const float r_sq = glm::dot(d, d);
+    return r_sq < support_sq && r_sq > 0.0f;
+  };
+  r_jacobian.offsets.assign(size_t(n) + 1, 0);
+  r_jacobian.kappa.resize(size_t(n));
+  parallel_for(n, 1024, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      int32_t count = 0;
+      for (const int32_t j : neighbors.neighbors_of(i)) {
+        count += in_support(i, j) ? 1 : 0;
+      }
+      r_jacobian.offsets[size_t(i) + 1] = count;
+      r_jacobian.kappa[size_t(i)] =
+          masses[i] * pressure_stiffness / std::max(density[i] * density[i], 1e-30f);
+    }
+  });
+  for (int64_t i = 0; i < n; i++) {
+    r_jacobian.offsets[size_t(i) + 1] += r_jacobian.offsets[size_t(i)];
+  }
+  const size_t entries_num = size_t(r_jacobian.offsets[size_t(n)]);
+  r_jacobian.partners.resize(entries_num);
+  r_jacobian.gradients.resize(entries_num);
+  r_jacobian.along.resize(entries_num);
+  r_jacobian.across.resize(entries_num);
+  const std::vector<float> &kappa = r_jacobian.kappa;
+  parallel_for(n, 1024, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      int32_t e = r_jacobian.offsets[size_t(i)];
+      for (const int32_t j : neighbors.neighbors_of(i)) {
+        if (!in_support(i, j)) {
+          continue;
+        }
+        const vec3 x_ij = positions[j] - positions[i];
+        const float r = glm::length(x_ij);
+        const vec3 g = masses[j] * sph_kernel_gradient_i(x_ij, h);
+        /* c_ij = κ_i C_i m_j + κ_j C_j m_i, times W'' along x̂ and W'/r across. */
+        const float c = kappa[size_t(i)] * (density[i] - rest_density) * masses[j] +
+                        kappa[size_t(j)] * (density[j] - rest_density) * masses[i];
+        const float g_sq = glm::dot(g, g);
+        r_jacobian.partners[size_t(e)] = j;
+        r_jacobian.gradients[size_t(e)] = g;
+        r_jacobian.along[size_t(e)] =
+            g_sq > 0.0f ? std::max(0.0f, c * sph_kernel_second_derivative(r, h)) / g_sq : 0.0f;
+        r_jacobian.across[size_t(e)] = std::max(0.0f, c * sph_kernel_derivative(r, h) / r);
+        e++;
+      }
     }
   });
 }

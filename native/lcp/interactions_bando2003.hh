@@ -26,11 +26,39 @@ struct HairInteractionSettings {
 /* Eq. 16 forces go to r_forces (explicit); eq. 17-18 forces, linear in the relative velocity,
  * go to r_damped_forces with their diagonal coefficients in r_damping. */
 void accumulate_hair_interactions(Span<vec3> positions, Span<vec3> velocities,
-                                  Span<vec3> directions, Span<float> masses,
-                                  Span<float> density, const NeighborList &neighbors,
+                                  Span<vec3> directions, Span<float> masses, Span<float> density,
+                                  const NeighborList &neighbors,
                                   const HairInteractionSettings &settings,
                                   MutableSpan<vec3> r_forces, MutableSpan<vec3> r_damped_forces,
                                   MutableSpan<float> r_damping);
+
+/* Eq. 16 as a stiffness, for the implicit step of lcp/implicit_springs.hh. With
+ * P = k_a (ρ − ρ₀), eq. 16 is the force of the energy U = Σ_i ½ κ_i (ρ_i − ρ₀)² with
+ * κ_i = m_i k_a / ρ_i² held over the step: by eq. 1, ∂ρ_i/∂x_i = Σ_j m_j ∇_i W_ij and
+ * ∂ρ_j/∂x_i = m_i ∇_i W_ij, so
+ *     −∂U/∂x_i = −Σ_j (κ_i C_i m_j + κ_j C_j m_i) ∇_i W_ij
+ *              = −Σ_j m_i m_j (P_i/ρ_i² + P_j/ρ_j²) ∇_i W_ij     (C = ρ − ρ₀),
+ * eq. 16 term by term. Its stiffness is K_p = Jᵀ κ J + Σ_i κ_i C_i ∂²ρ_i/∂x². The first
+ * (Gauss–Newton) part is positive semi-definite, with J = ∂ρ/∂x:
+ *     (J d)_i = Σ_j g_ij · (d_i − d_j),   (Jᵀ t)_i = Σ_j g_ij (t_i + (m_i/m_j) t_j),
+ * g_ij = m_j ∇_i W_ij over the neighbours within 2h₂. The second is a sum over pairs, each a
+ * spring between i and j: c_ij [W'' x̂x̂ᵀ + (W'/r)(I − x̂x̂ᵀ)] with c_ij = κ_i C_i m_j +
+ * κ_j C_j m_i (the pair's W appears in ρ_i and in ρ_j); its positive parts are kept, as the
+ * springs keep theirs (lcp/implicit_springs.hh). Without them a compressed cluster (ρ ≫ ρ₀)
+ * whose pairs sit in the kernel's convex tail (W'' > 0) overshoots at large steps. */
+struct DensityJacobian {
+  /* Compressed rows: the neighbours j of particle i within 2h₂ are
+   * partners[offsets[i] .. offsets[i + 1]), with g_ij in `gradients`, and the pair spring's
+   * positive parts: `along` (over |g_ij|², so that along · g (g · d) is its x̂x̂ᵀ term) and
+   * `across` (its I term). */
+  std::vector<int32_t> offsets, partners;
+  std::vector<vec3> gradients;
+  std::vector<float> along, across;
+  std::vector<float> kappa; /* κ_i = m_i k_a / ρ_i² */
+};
+void compute_density_jacobian(Span<vec3> positions, Span<float> masses, Span<float> density,
+                              const NeighborList &neighbors, float h, float pressure_stiffness,
+                              float rest_density, DensityJacobian &r_jacobian);
 
 /* Interpenetrating pairs: pairs of particles (i < j, at least one of them free) closer than
  * `distance`. Two samples of the hair volume in the same place means one lock of hair has

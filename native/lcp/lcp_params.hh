@@ -42,6 +42,12 @@ struct LcpParams {
    * two locks from passing into each other when they meet (Fig. 6 test); it also sets the
    * substeps through the CFL bound. */
   float pressure_stiffness = 0.2f;
+  /* The stiffness of eq. 16 joins the implicit springs' backward-Euler step
+   * (lcp/implicit_springs.hh): stable at any time step, so its CFL bound no longer sets the
+   * substeps; backward Euler also damps fast hair-hair motion (Fig. 6's bar parts the hair
+   * less cleanly at 1-5 substeps). Off (the default), or with explicit springs: eq. 16 is
+   * explicit, with as many substeps as its CFL bound needs. */
+  bool implicit_pressure = false;
   float rest_density = 8.0f;      /* kg/m³, ρ₀: small = repulsive, large = cohesive. */
   bool hair_collision = true;     /* Apply eq. 17. */
   float collision_damping = 60.0f; /* 1/s, d_c: damping of approaching hair (eq. 17). */
@@ -58,8 +64,8 @@ struct LcpParams {
   float wind_drag = 20.0f;    /* 1/s, k_d: hair-air drag rate, both ways. */
   float air_density = 1.2f;   /* kg/m³: density of the air particles. */
   float body_friction = 0.3f; /* μ: Coulomb friction of hair on the body. */
-  /* Fewest time steps per frame: more are taken when the explicit pressure of eq. 16 (CFL)
-   * or explicit springs need them. */
+  /* Fewest time steps per frame: more are taken when the explicit pressure of eq. 16 (CFL),
+   * the wind or explicit springs need them. */
   int32_t substeps = 1;
   /* Most time steps per frame: a frame whose stability bounds (the pressure's CFL, explicit
    * springs) ask for more is refused with the reason, rather than running for minutes. */
@@ -138,6 +144,11 @@ struct LcpParams {
        ParamInfo{"pressure_stiffness", "k_a", "m²/s²", 0.0, 1e4,
                  "Magnitude of the attraction/repulsion, P = k_a(ρ − ρ₀) (eq. 16)"}
            .labeled("Attraction"));
+    fn(&LcpParams::implicit_pressure,
+       ParamInfo{"implicit_pressure", "", "", 0, 1,
+                 "Integrate the attraction/repulsion (eq. 16) implicitly with the springs: its "
+                 "sound speed √k_a no longer adds substeps. Off (or with explicit springs): "
+                 "explicit, substeps added as its CFL bound needs"});
     fn(&LcpParams::rest_density,
        ParamInfo{"rest_density", "ρ₀", "kg/m³", 0.0, 1e5,
                  "Average hair density kept by eq. 16: small is repulsive, large cohesive"});
@@ -169,12 +180,12 @@ struct LcpParams {
                  "Coulomb friction coefficient of hair sliding on the body (§3.5)"});
     fn(&LcpParams::substeps,
        ParamInfo{"substeps", "", "", 1, 1000,
-                 "Fewest time steps per frame; more are taken as the hair-hair pressure (eq. 16) "
-                 "or explicit springs need"});
+                 "Fewest time steps per frame; more are taken as an explicit hair-hair "
+                 "pressure (eq. 16), the wind or explicit springs need"});
     fn(&LcpParams::max_substeps,
        ParamInfo{"max_substeps", "", "", 1, 100000,
                  "Most time steps per frame: a frame whose stability bounds (hair-hair pressure "
-                 "CFL, explicit springs) need more is refused with the reason"});
+                 "CFL, wind, explicit springs) need more is refused with the reason"});
   }
 };
 

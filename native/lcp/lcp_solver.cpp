@@ -37,14 +37,10 @@ vec3 LcpSolver::fictitious_acceleration(const int64_t i) const
 }
 
 LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
-                     const mat4 &head_to_world_rest, const WindParams &wind)
-    : params_(params),
-      head_rest_(HeadPose::from_matrix(head_to_world_rest)),
-      u_(particles_wo.u),
-      v_(particles_wo.v),
-      s_(particles_wo.s),
-      wind_params_(wind),
-      wind_(wind)
+                     const mat4 &head_to_world_rest, const WindParams &wind) :
+    params_(params),
+    head_rest_(HeadPose::from_matrix(head_to_world_rest)), u_(particles_wo.u), v_(particles_wo.v),
+    s_(particles_wo.s), wind_params_(wind), wind_(wind)
 {
   const int64_t n = particles_wo.size();
   const mat3 to_head = glm::transpose(head_rest_.rotation_matrix());
@@ -53,21 +49,21 @@ LcpSolver::LcpSolver(const LcpParams &params, const LcpParticles &particles_wo,
   is_root_.resize(size_t(n));
   is_fixed_.resize(size_t(n));
   for (int64_t i = 0; i < n; i++) {
-    x_rest_head_[size_t(i)] = to_head * (particles_wo.positions[size_t(i)] - head_rest_.translation);
+    x_rest_head_[size_t(i)] =
+        to_head * (particles_wo.positions[size_t(i)] - head_rest_.translation);
     t_rest_head_[size_t(i)] = glm::normalize(to_head * particles_wo.directions[size_t(i)]);
     is_root_[size_t(i)] = s_[size_t(i)] < 0.0f ? 1 : 0;
-    is_fixed_[size_t(i)] = is_root_[size_t(i)] ||
-                           (!particles_wo.fixed.empty() && particles_wo.fixed[size_t(i)]);
+    is_fixed_[size_t(i)] =
+        is_root_[size_t(i)] || (!particles_wo.fixed.empty() && particles_wo.fixed[size_t(i)]);
   }
   separate_close_particles(x_rest_head_, is_fixed_, rest_min_distance(), 20, [](vec3 &) {});
 
   /* Particle mass: the hair density ρ_h divided by the mean SPH number density of the rest
    * state (eq. 1 with unit masses), so that eq. 1 gives ρ_h on average at rest. */
-  grid_.build(x_rest_head_, 2.0f * params_.h2);
-  find_neighbors(grid_, x_rest_head_, 2.0f * params_.h2, true, neighbors_);
+  neighbors_.update(x_rest_head_, 2.0f * params_.h2, neighbor_skin());
   std::vector<float> unit_masses(size_t(n), 1.0f);
   density_.resize(size_t(n));
-  compute_density(x_rest_head_, unit_masses, neighbors_, params_.h2, density_);
+  compute_density(x_rest_head_, unit_masses, neighbors_.list(), params_.h2, density_);
   double number_density = 0.0;
   for (const float d : density_) {
     number_density += double(d);
@@ -127,8 +123,8 @@ void LcpSolver::set_body_contact(ContactQuery query)
   const auto out_of_body = [&](vec3 &x_head) {
     Contact contact;
     if (contact_query_(rotation * x_head + head_rest_.translation, contact)) {
-      x_head = to_head * (contact.surface_point_wo + 1e-4f * contact.normal_wo -
-                          head_rest_.translation);
+      x_head = to_head *
+               (contact.surface_point_wo + 1e-4f * contact.normal_wo - head_rest_.translation);
     }
   };
   parallel_for(int64_t(x_rest_head_.size()), 1024, [&](const IndexRange range) {
@@ -186,8 +182,9 @@ void LcpSolver::build_tethers()
         }
       }
       anchor_[size_t(i)] = anchor;
-      const float reach = std::max(s_[size_t(i)] - s_[size_t(anchor)],
-                                   glm::length(x_rest_head_[size_t(i)] - x_rest_head_[size_t(anchor)]));
+      const float reach =
+          std::max(s_[size_t(i)] - s_[size_t(anchor)],
+                   glm::length(x_rest_head_[size_t(i)] - x_rest_head_[size_t(anchor)]));
       tether_length_[size_t(i)] = (1.0f + tether_slack) * reach;
     }
   });
@@ -195,6 +192,7 @@ void LcpSolver::build_tethers()
 
 void LcpSolver::enforce_tethers()
 {
+  tethered_.assign(x_head_.size(), 0);
   if (anchor_.empty() || anchor_.front() < 0) {
     return;
   }
@@ -210,6 +208,7 @@ void LcpSolver::enforce_tethers()
         continue;
       }
       /* Back onto the tether; the outward part of the velocity is lost (inelastic). */
+      tethered_[size_t(i)] = 1;
       const vec3 out = d / r;
       x_head_[size_t(i)] -= (r - length) * out;
       vec3 &v = v_head_[size_t(i)];
@@ -217,6 +216,10 @@ void LcpSolver::enforce_tethers()
     }
   });
 }
+
+/* The most air particles the wind may take (each costs SPH work every substep): a box of
+ * 50 cm around the hair at the 3 cm default spacing holds about 5,000. */
+static constexpr int64_t max_air_particles = 2000000;
 
 /* m/s: no head motion gives hair this speed in the head's frame (a head teleported 100 m in a
  * frame gives 2,400 m/s); a particle past it has run away. */
@@ -242,7 +245,9 @@ void LcpSolver::check_divergence(const int frame_substep)
         }
         return none;
       },
-      [](const int64_t a, const int64_t b) { return std::min(a, b); });
+      [](const int64_t a, const int64_t b) {
+        return std::min(a, b);
+      });
   if (bad == none) {
     return;
   }
@@ -271,9 +276,8 @@ void LcpSolver::reset()
   failure_.clear();
   compute_spring_coefficients(connections_, x_head_, cross_sections_, params_.h1,
                               params_.young_modulus, k_, alpha_k_, side_sums_);
-  grid_.build(x_head_, 2.0f * params_.h2);
-  find_neighbors(grid_, x_head_, 2.0f * params_.h2, true, neighbors_);
-  compute_density(x_head_, masses_, neighbors_, params_.h2, density_);
+  neighbors_.update(x_head_, 2.0f * params_.h2, neighbor_skin());
+  compute_density(x_head_, masses_, neighbors_.list(), params_.h2, density_);
   HeadState head;
   head.rotation = head_.rotation_matrix();
   head.translation = head_.translation;
@@ -283,14 +287,35 @@ void LcpSolver::reset()
   count_interpenetrations();
 }
 
+/* Eq. 16's stiffness joins the implicit springs' step (lcp/implicit_springs.hh). */
+static bool implicit_pressure(const LcpParams &params)
+{
+  return params.implicit_pressure && params.implicit_springs && params.attraction_repulsion &&
+         params.pressure_stiffness > 0.0f;
+}
+
 /* s: the explicit pressure's CFL bound 0.6 h₂ / c, with the sound speed c = √(dP/dρ) = √k_a
  * of eq. 16 (the Fig. 6 scene went unstable near 1.4 h₂ / c); infinite without pressure. */
 static float pressure_time_step(const LcpParams &params)
 {
-  if (!params.attraction_repulsion || !(params.pressure_stiffness > 0.0f)) {
+  if (!params.attraction_repulsion || !(params.pressure_stiffness > 0.0f) ||
+      implicit_pressure(params))
+  {
     return std::numeric_limits<float>::infinity();
   }
   return 0.6f * params.h2 / std::sqrt(params.pressure_stiffness);
+}
+
+/* s: the air particles of the wind (§3.5) cross at most their SPH support 2h a substep, so
+ * that none skips the hair it passes through (explicit SPH air, hair-air drag); infinite
+ * without wind. */
+static float wind_time_step(const LcpParams &params, const WindParams &wind)
+{
+  const float fastest = wind.speed * (1.0f + wind.turbulence);
+  if (!(fastest > 0.0f) || !(glm::length(wind.direction) > 0.0f)) {
+    return std::numeric_limits<float>::infinity();
+  }
+  return 2.0f * params.wind_particle_spacing / fastest;
 }
 
 /* Substeps of `dt_limit` in a frame, saturating far above any max_substeps. */
@@ -304,15 +329,16 @@ static int substeps_for(const float frame_dt, const float dt_limit)
 static float spring_time_step(const LcpConnections &connections, const Span<float> alpha_k,
                               const Span<uint8_t> is_root, const float mass)
 {
-  const float omega = std::sqrt(2.0f * max_particle_stiffness(connections, alpha_k, is_root) / mass);
-  return std::isfinite(omega) && omega > 0.0f ? 1.8f / omega :
-                                                std::numeric_limits<float>::infinity();
+  const float omega =
+      std::sqrt(2.0f * max_particle_stiffness(connections, alpha_k, is_root) / mass);
+  return std::isfinite(omega) && omega > 0.0f ? 1.8f / omega
+                                              : std::numeric_limits<float>::infinity();
 }
 
 LcpSolver::SubstepEstimate LcpSolver::estimate_substeps(const float frame_dt) const
 {
   char text[300];
-  SubstepEstimate estimate{std::max(1, params_.substeps), "the substeps setting"};
+  SubstepEstimate estimate{ std::max(1, params_.substeps), "the substeps setting" };
   const float dt_pressure = pressure_time_step(params_);
   if (substeps_for(frame_dt, dt_pressure) > estimate.count) {
     estimate.count = substeps_for(frame_dt, dt_pressure);
@@ -320,6 +346,15 @@ LcpSolver::SubstepEstimate LcpSolver::estimate_substeps(const float frame_dt) co
                   "the CFL bound of the hair-hair pressure (eq. 16), 0.6 h₂/√k_a = %.3g s: raise "
                   "h₂ or lower k_a",
                   double(dt_pressure));
+    estimate.reason = text;
+  }
+  const float dt_wind = wind_time_step(params_, wind_params_);
+  if (substeps_for(frame_dt, dt_wind) > estimate.count) {
+    estimate.count = substeps_for(frame_dt, dt_wind);
+    std::snprintf(text, sizeof(text),
+                  "the wind's speed: its air particles cross at most their support 2h = %.3g m "
+                  "a substep, %.3g s: raise the wind particle spacing or lower the wind speed",
+                  double(2.0f * params_.wind_particle_spacing), double(dt_wind));
     estimate.reason = text;
   }
   if (!params_.implicit_springs) {
@@ -354,8 +389,8 @@ bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
    * fictitious forces (§3.5). */
   const HeadPose next = HeadPose::from_matrix(head_to_world);
   const HeadVelocity velocity = HeadVelocity::between(head_, next, frame_dt);
-  const HeadAcceleration acceleration = HeadAcceleration::between(head_velocity_, velocity,
-                                                                  frame_dt);
+  const HeadAcceleration acceleration =
+      HeadAcceleration::between(head_velocity_, velocity, frame_dt);
   const auto head_at = [&](const float tau) {
     const HeadPose pose = HeadPose::interpolate(head_, next, tau);
     HeadState state;
@@ -371,19 +406,29 @@ bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
   if (has_wind()) {
     wind_box_ = wind_box_around(positions_wo_, wind_params_.direction,
                                 3.0f * params_.wind_particle_spacing);
+    const int64_t air_num = wind_box_count(wind_box_, params_.wind_particle_spacing);
+    if (air_num > max_air_particles) {
+      char text[300];
+      std::snprintf(text, sizeof(text),
+                    "LCP refused the frame: the wind needs %lld air particles %.3g m apart "
+                    "around the hair, more than %lld. Raise the wind particle spacing.",
+                    (long long)air_num, double(params_.wind_particle_spacing),
+                    (long long)max_air_particles);
+      failure_ = text;
+      return false;
+    }
     if (air_x_wo_.empty()) {
-      fill_wind_box(wind_box_, params_.wind_particle_spacing, wind_, time_,
-                    uint64_t(params_.seed), air_x_wo_, air_v_wo_);
+      fill_wind_box(wind_box_, params_.wind_particle_spacing, wind_, time_, uint64_t(params_.seed),
+                    air_x_wo_, air_v_wo_);
     }
     wrap_air_particles(wind_box_, wind_, time_, air_x_wo_, air_v_wo_);
   }
 
-  /* The frame is cut into at least `substeps` equal substeps, short enough for the explicit
-   * pressure's CFL bound. Explicit springs also keep each substep below their stability
-   * bound; α grows as connections weaken, so that bound is re-evaluated every substep. */
-  const int substeps = std::max(std::max(1, params_.substeps),
-                                substeps_for(frame_dt, pressure_time_step(params_)));
-  const float dt_max = frame_dt / float(substeps);
+  /* The frame is cut into the equal substeps of the estimate: at least `substeps`, short
+   * enough for an explicit pressure's CFL bound and the wind. Explicit springs also keep each
+   * substep below their stability bound; α grows as connections weaken, so that bound is
+   * re-evaluated every substep. */
+  const float dt_max = frame_dt / float(estimate.count);
   float elapsed = 0.0f;
   substeps_used_ = 0;
   spring_iterations_ = 0;
@@ -420,11 +465,11 @@ bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
 void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &end)
 {
   const int64_t n = int64_t(x_head_.size());
-  /* 1. Neighbour search: a uniform grid of 2h₂ cells rebuilt every step (§3.1). */
-  grid_.build(x_head_, 2.0f * params_.h2);
-  find_neighbors(grid_, x_head_, 2.0f * params_.h2, true, neighbors_);
+  /* 1. Neighbour search (§3.1): a uniform grid, its list kept while no pair can be missing
+   * from it (core/spatial_grid.hh's VerletNeighbors). */
+  neighbors_.update(x_head_, 2.0f * params_.h2, neighbor_skin());
   /* 2. Density, eq. 1. */
-  compute_density(x_head_, masses_, neighbors_, params_.h2, density_);
+  compute_density(x_head_, masses_, neighbors_.list(), params_.h2, density_);
 
   /* 3. Forces. */
   std::fill(forces_.begin(), forces_.end(), vec3(0.0f));
@@ -446,7 +491,7 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   interactions.collision_damping = params_.collision_damping;
   interactions.friction = params_.hair_friction;
   interactions.friction_damping = params_.friction_damping;
-  accumulate_hair_interactions(x_head_, v_head_, t_head_, masses_, density_, neighbors_,
+  accumulate_hair_interactions(x_head_, v_head_, t_head_, masses_, density_, neighbors_.list(),
                                interactions, forces_, damped_forces_, damping_);
   if (has_wind()) {
     accumulate_wind(dt, mid);
@@ -475,7 +520,8 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
       const vec3 acceleration = forces_[size_t(i)] / m + gravity_head + inertial;
       /* Damping between particles (springs, eq. 17-18): the factor 2 bounds the damping of
        * relative velocities too (Gershgorin on Σc). */
-      v += dt * acceleration + dt * damped_forces_[size_t(i)] / (m + 2.0f * dt * damping_[size_t(i)]);
+      v += dt * acceleration +
+           dt * damped_forces_[size_t(i)] / (m + 2.0f * dt * damping_[size_t(i)]);
       /* Air friction against still air, −μ m v_wo (§3.5), integrated implicitly on its own:
        * folded into the pair damping above, strong springs would all but cancel it. */
       const vec3 carried = glm::cross(w, x) + frame_velocity_head;
@@ -483,11 +529,20 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
     }
   });
   if (params_.implicit_springs) {
-    spring_iterations_ += implicit_springs_
-                              .step(connections_, x_head_, alpha_k_, params_.spring_damping,
-                                    masses_, is_fixed_, dt, v_head_)
-                              .iterations;
+    /* The solve stops when what it leaves would move no particle by h₂/10,000 over the step. */
+    implicit_springs_.velocity_tolerance = 1e-4f * params_.h2 / dt;
+    if (implicit_pressure(params_)) {
+      compute_density_jacobian(x_head_, masses_, density_, neighbors_.list(), params_.h2,
+                               params_.pressure_stiffness, params_.rest_density,
+                               pressure_jacobian_);
+    }
+    spring_iterations_ +=
+        implicit_springs_
+            .step(connections_, x_head_, alpha_k_, params_.spring_damping, masses_, is_fixed_, dt,
+                  implicit_pressure(params_) ? &pressure_jacobian_ : nullptr, v_head_)
+            .iterations;
   }
+  x_start_ = x_head_;
   parallel_for(n, 4096, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       x_head_[size_t(i)] += dt * v_head_[size_t(i)];
@@ -499,6 +554,17 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   if (contact_query_) {
     collide_with_body(end);
   }
+  /* A tethered particle moves as far as the tether and the body let it: its velocity is that
+   * motion (position-based dynamics' velocity update), so that a particle held between its
+   * tether and the body (the straight tether would pass through the head) keeps no velocity
+   * it cannot follow. */
+  parallel_for(n, 4096, [&](const IndexRange range) {
+    for (int64_t i = range.start; i < range.one_after_last(); i++) {
+      if (tethered_[size_t(i)]) {
+        v_head_[size_t(i)] = (x_head_[size_t(i)] - x_start_[size_t(i)]) / dt;
+      }
+    }
+  });
   /* 5. Hair directions, eq. 15. */
   update_directions(connections_, x_head_, alpha_k_, is_fixed_, t_head_);
 }
@@ -512,8 +578,8 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       const vec3 &x = x_head_[size_t(i)];
       hair_x_wo_[size_t(i)] = mid.rotation * x + mid.translation;
-      hair_v_wo_[size_t(i)] = mid.rotation * (v_head_[size_t(i)] + glm::cross(mid.omega_head, x)) +
-                              mid.velocity_wo;
+      hair_v_wo_[size_t(i)] =
+          mid.rotation * (v_head_[size_t(i)] + glm::cross(mid.omega_head, x)) + mid.velocity_wo;
     }
   });
   const int64_t air_num = int64_t(air_x_wo_.size());
@@ -535,8 +601,8 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
    * compressible), capped by the step's stability limit 0.4 h / Δt. */
   const float fastest = wind_params_.speed * (1.0f + wind_params_.turbulence);
   const float sound_speed = std::min(10.0f * fastest, 0.4f * h / dt);
-  accumulate_air_pressure(air_x_wo_, air_mass, params_.air_density, sound_speed, h,
-                          air_neighbors_, air_density_, air_forces_);
+  accumulate_air_pressure(air_x_wo_, air_mass, params_.air_density, sound_speed, h, air_neighbors_,
+                          air_density_, air_forces_);
   /* Drag both ways (§3.5). */
   hair_drag_damping_.assign(size_t(n), 0.0f);
   accumulate_drag(hair_x_wo_, hair_v_wo_, masses_, air_x_wo_, air_v_wo_, air_volumes_,
@@ -577,13 +643,13 @@ void LcpSolver::collide_with_body(const HeadState &end)
       }
       /* Velocity relative to the collider, in world space. */
       const vec3 carried_wo = end.rotation * glm::cross(end.omega_head, x) + end.velocity_wo;
-      vec3 v_rel_wo = contact.moves_with_head ?
-                          end.rotation * v :
-                          end.rotation * v + carried_wo - contact.velocity_wo;
+      vec3 v_rel_wo = contact.moves_with_head
+                          ? end.rotation * v
+                          : end.rotation * v + carried_wo - contact.velocity_wo;
       respond_to_contact(contact, params_.body_friction, p_wo, v_rel_wo);
       x = to_head * (p_wo - end.translation);
-      v = contact.moves_with_head ? to_head * v_rel_wo :
-                                    to_head * (v_rel_wo + contact.velocity_wo - carried_wo);
+      v = contact.moves_with_head ? to_head * v_rel_wo
+                                  : to_head * (v_rel_wo + contact.velocity_wo - carried_wo);
     }
   });
 }
@@ -595,19 +661,17 @@ void LcpSolver::update_world_outputs(const HeadState &head)
       const vec3 &x = x_head_[size_t(i)];
       positions_wo_[size_t(i)] = head.rotation * x + head.translation;
       directions_wo_[size_t(i)] = head.rotation * t_head_[size_t(i)];
-      velocities_wo_[size_t(i)] = head.rotation * (v_head_[size_t(i)] +
-                                                   glm::cross(head.omega_head, x)) +
-                                  head.velocity_wo;
+      velocities_wo_[size_t(i)] =
+          head.rotation * (v_head_[size_t(i)] + glm::cross(head.omega_head, x)) + head.velocity_wo;
     }
   });
 }
 
 void LcpSolver::count_interpenetrations()
 {
-  grid_.build(x_head_, 2.0f * params_.h2);
-  find_neighbors(grid_, x_head_, 2.0f * params_.h2, true, neighbors_);
-  interpenetrating_pairs_num_ = count_close_pairs(x_head_, is_fixed_, neighbors_,
-                                                  0.5f * params_.h2);
+  neighbors_.update(x_head_, 2.0f * params_.h2, neighbor_skin());
+  interpenetrating_pairs_num_ =
+      count_close_pairs(x_head_, is_fixed_, neighbors_.list(), 0.5f * params_.h2);
 }
 
 }  // namespace hairdyn

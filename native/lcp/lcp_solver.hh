@@ -42,6 +42,7 @@
 #include "core/spatial_grid.hh"
 #include "lcp/body_collision_bando2003.hh"
 #include "lcp/implicit_springs.hh"
+#include "lcp/interactions_bando2003.hh"
 #include "lcp/lcp_params.hh"
 #include "lcp/sampling_bando2003.hh"
 #include "lcp/springs_bando2003.hh"
@@ -95,6 +96,8 @@ class LcpSolver {
   int64_t interpenetrating_pairs_num() const { return interpenetrating_pairs_num_; }
   /* Substeps of the last frame: params.substeps, or more when the springs need them. */
   int substeps_used() const { return substeps_used_; }
+  /* Neighbour searches since the solver was made. */
+  int64_t neighbor_searches() const { return neighbors_.builds(); }
   /* Conjugate-gradient iterations of the implicit springs over the last frame. */
   int spring_iterations() const { return spring_iterations_; }
 
@@ -131,10 +134,10 @@ class LcpSolver {
 
  private:
   struct HeadState {
-    mat3 rotation{1.0f};  /* Head to world, at the time the quantity applies. */
-    vec3 translation{0.0f};
-    vec3 velocity_wo{0.0f}; /* Of the head frame's origin. */
-    vec3 omega_head{0.0f};  /* Angular velocity, head components. */
+    mat3 rotation{ 1.0f }; /* Head to world, at the time the quantity applies. */
+    vec3 translation{ 0.0f };
+    vec3 velocity_wo{ 0.0f };      /* Of the head frame's origin. */
+    vec3 omega_head{ 0.0f };       /* Angular velocity, head components. */
     HeadAcceleration acceleration; /* World; its center is `translation`. */
   };
   /* −Rᵀ of the transport acceleration at particle i's position x (head components). */
@@ -142,6 +145,8 @@ class LcpSolver {
   /* Rest particles are spaced at least this far apart (separate_close_particles): above the
    * h₂/2 of count_close_pairs, so the rest state has no interpenetrating pair. */
   float rest_min_distance() const { return 0.6f * params_.h2; }
+  /* The neighbour list's skin: it is found again once a particle has moved h₂ / 8. */
+  float neighbor_skin() const { return 0.25f * params_.h2; }
   void substep(float dt, const HeadState &mid, const HeadState &end);
   void accumulate_wind(float dt, const HeadState &mid);
   bool has_wind() const
@@ -175,13 +180,15 @@ class LcpSolver {
   HeadVelocity head_velocity_;
   HeadState last_head_; /* Of the last substep's middle. */
 
-  /* Per step buffers. */
-  SpatialGrid grid_;
-  NeighborList neighbors_;
+  /* Per step buffers. The hair's neighbours within 2h₂ (head frame). */
+  VerletNeighbors neighbors_;
   std::vector<float> density_, k_, alpha_k_, side_sums_, damping_;
   int substeps_used_ = 0, spring_iterations_ = 0;
   ImplicitSprings implicit_springs_;
+  DensityJacobian pressure_jacobian_; /* eq. 16's stiffness, when implicit */
   std::vector<vec3> forces_, damped_forces_;
+  std::vector<vec3> x_start_;     /* positions at the substep's start */
+  std::vector<uint8_t> tethered_; /* moved back onto their tether this substep */
 
   /* Wind. */
   WindParams wind_params_;

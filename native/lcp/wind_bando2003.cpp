@@ -33,6 +33,19 @@ WindBox wind_box_around(const Span<vec3> hair_positions_wo, const vec3 &directio
   return box;
 }
 
+static glm::ivec3 wind_box_counts(const WindBox &box, const float spacing)
+{
+  /* Clamped before the conversion, so that a huge box does not overflow. */
+  const vec3 counts = glm::clamp((box.hi - box.lo) / spacing, vec3(1.0f), vec3(1e6f));
+  return glm::ivec3(counts);
+}
+
+int64_t wind_box_count(const WindBox &box, const float spacing)
+{
+  const glm::ivec3 counts = wind_box_counts(box, spacing);
+  return int64_t(counts.x) * int64_t(counts.y) * int64_t(counts.z);
+}
+
 void fill_wind_box(const WindBox &box, const float spacing, const WindField &wind,
                    const float time, const uint64_t seed, std::vector<vec3> &r_positions,
                    std::vector<vec3> &r_velocities)
@@ -41,8 +54,7 @@ void fill_wind_box(const WindBox &box, const float spacing, const WindField &win
   std::uniform_real_distribution<float> jitter(-0.2f * spacing, 0.2f * spacing);
   r_positions.clear();
   r_velocities.clear();
-  const vec3 extent = box.hi - box.lo;
-  const glm::ivec3 counts = glm::max(glm::ivec3(1), glm::ivec3(extent / spacing));
+  const glm::ivec3 counts = wind_box_counts(box, spacing);
   for (int z = 0; z < counts.z; z++) {
     for (int y = 0; y < counts.y; y++) {
       for (int x = 0; x < counts.x; x++) {
@@ -66,7 +78,8 @@ void wrap_air_particles(const WindBox &box, const WindField &wind, const float t
       bool fresh = false;
       for (int a = 0; a < 3; a++) {
         if (q[a] < box.lo[a] || q[a] > box.hi[a]) {
-          q[a] = box.lo[a] + std::fmod(std::fmod(q[a] - box.lo[a], extent[a]) + extent[a], extent[a]);
+          q[a] =
+              box.lo[a] + std::fmod(std::fmod(q[a] - box.lo[a], extent[a]) + extent[a], extent[a]);
           fresh |= a == 0;
         }
       }
@@ -120,8 +133,9 @@ void accumulate_drag(const Span<vec3> target_positions, const Span<vec3> target_
       vec3 force(0.0f);
       float damping = 0.0f;
       for (const int32_t j : target_to_sources.neighbors_of(i)) {
-        const float coefficient = k_d * target_factors[i] * source_factors[j] *
-                                  sph_kernel(glm::length(source_positions[j] - target_positions[i]), h);
+        const float coefficient =
+            k_d * target_factors[i] * source_factors[j] *
+            sph_kernel(glm::length(source_positions[j] - target_positions[i]), h);
         force += coefficient * (source_velocities[j] - target_velocities[i]);
         damping += coefficient;
       }

@@ -9,22 +9,25 @@
 #include <vector>
 
 #include "core/math.hh"
-#include "core/wind.hh"
 #include "core/span.hh"
 #include "core/spatial_grid.hh"
+#include "core/wind.hh"
 
 namespace hairdyn {
 
 /* The box of air, aligned with the wind: axis 0 along the wind, 1 and 2 across it (2 as near
  * world Z as the wind allows). */
 struct WindBox {
-  mat3 axes_wo{1.0f}; /* Columns: along, across, up. */
-  vec3 lo{0.0f}, hi{0.0f}; /* In box coordinates. */
+  mat3 axes_wo{ 1.0f };        /* Columns: along, across, up. */
+  vec3 lo{ 0.0f }, hi{ 0.0f }; /* In box coordinates. */
 };
 
 /* A box around `hair_positions_wo` padded by `margin`, for wind blowing along `direction`
  * (non-zero, world). */
 WindBox wind_box_around(Span<vec3> hair_positions_wo, const vec3 &direction, float margin);
+
+/* How many air particles fill_wind_box puts in `box` at `spacing`. */
+int64_t wind_box_count(const WindBox &box, float spacing);
 
 /* Air particles on a jittered lattice of `spacing` filling the box, moving with the wind
  * field at `time`. */

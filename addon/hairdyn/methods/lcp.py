@@ -289,6 +289,7 @@ class Lcp(Method):
                 "h2",
                 "attraction_repulsion",
                 "pressure_stiffness",
+                "implicit_pressure",
                 "rest_density",
                 "hair_collision",
                 "collision_damping",
@@ -297,6 +298,7 @@ class Lcp(Method):
             ),
             active={
                 "pressure_stiffness": lambda lcp: lcp.attraction_repulsion,
+                "implicit_pressure": lambda lcp: lcp.attraction_repulsion and lcp.implicit_springs,
                 "rest_density": lambda lcp: lcp.attraction_repulsion,
                 "collision_damping": lambda lcp: lcp.hair_collision,
                 "friction_damping": lambda lcp: lcp.hair_friction,
