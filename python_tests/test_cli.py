@@ -54,6 +54,22 @@ def test_bad_parameters_exit_2(args, message, tmp_path):
     assert not (tmp_path / "r.json").exists()
 
 
+def test_a_documented_minimum_typed_as_printed_is_accepted_and_a_wind_too_fine_refused(capsys):
+    """The tooltip's minimum, 0.001 m, typed as such is in range (a FLOAT property holds it in
+    single precision); LCP with the implicit pressure at that air spacing would need millions of
+    air particles: the frame is refused with the reason and the run exits 1."""
+    from hairdyn import cli
+
+    code = cli.main(["--blend", str(FIXTURES / "head_curves.blend"), "run", "--object", "Hair",
+                     "--frames", "1", "2", "--set", "method=lcp",
+                     "--set", "lcp.implicit_pressure=1", "--set", "wind.speed=2",
+                     "--set", "lcp.wind_particle_spacing=0.001"])
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert "error: LCP refused the frame: the wind needs" in err, err
+    assert "Raise the wind particle spacing" in err
+
+
 def test_bad_parameter_message_and_exit_code_in_a_real_process():
     result = run_cli("head_curves.blend", "run", "--object", "Hair", "--set", "bendiness=3")
     assert result.returncode == 2

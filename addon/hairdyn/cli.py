@@ -16,6 +16,7 @@ report still written when possible), 2 bad command line (unknown object, paramet
 """
 import argparse
 import json
+import struct
 import sys
 from pathlib import Path
 
@@ -72,6 +73,14 @@ def _wedge():
     return sys.modules["hairdyn_wedge"]
 
 
+def _as_stored(value, kind):
+    """`value` as Blender stores it: FLOAT properties, and their bounds, are single precision,
+    so 0.001 typed for a minimum of 0.001 compares equal to it."""
+    if kind != 'FLOAT' or not abs(value) <= 3.4e38:
+        return value
+    return struct.unpack("f", struct.pack("f", value))[0]
+
+
 def _parse_value(prop, text):
     """Text -> a value for the RNA property `prop`, or UsageError."""
     kind = prop.type
@@ -94,7 +103,7 @@ def _parse_value(prop, text):
             raise UsageError(f"{prop.identifier} must be {'an integer' if kind == 'INT' else 'a number'}, "
                              f"not '{text}'") from None
         for value in values:
-            if not (prop.hard_min <= value <= prop.hard_max) or value != value:
+            if not (prop.hard_min <= _as_stored(value, kind) <= prop.hard_max):
                 raise UsageError(f"{prop.identifier} must be between {prop.hard_min:g} and "
                                  f"{prop.hard_max:g}, not {text}")
         return values if prop.array_length else values[0]

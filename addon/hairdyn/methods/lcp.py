@@ -385,8 +385,8 @@ class Lcp(Method):
     def step(self, frame_dt, head_matrix):
         try:
             self.solver.step(frame_dt, head_matrix)
-        except ValueError as error:  # a refused or diverged frame, named by the solver
-            raise HairdynError(f"LCP: {error}") from None
+        except ValueError as error:  # a refused or diverged frame: the solver's sentence
+            raise HairdynError(str(error)) from None  # names LCP
         self.strand_positions = self.skin.apply(
             self.solver.positions, head_matrix, self.collider_set
         )
