@@ -100,9 +100,14 @@ TEST(LcpKernels, GridFindsExactlyTheBruteForceNeighboursWithoutACap)
   SpatialGrid grid;
   grid.build(points, radius);
   NeighborList list;
+  std::vector<int32_t> first_order; /* the rows' order, which must not depend on the threads */
   for (const int threads : { 1, 2 }) {
     set_thread_num(threads);
     find_neighbors(grid, points, radius, true, list);
+    if (first_order.empty()) {
+      first_order = list.indices;
+    }
+    ASSERT_EQ(list.indices, first_order) << "threads " << threads;
     for (size_t i = 0; i < points.size(); i += 7) {
       std::vector<int32_t> expected;
       for (size_t j = 0; j < points.size(); j++) {

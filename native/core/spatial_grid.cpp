@@ -63,10 +63,105 @@ void SpatialGrid::build(const Span<vec3> points, const float cell_size)
   });
 }
 
+void SpatialGrid::own_neighbors(const float radius, NeighborList &r_list) const
+{
+  assert(radius <= cell_size_ * 1.0001f);
+  const int64_t size = points_.size();
+  const int64_t buckets_num = int64_t(bucket_mask_) + 1;
+  const int64_t grain = 1024;
+  const int64_t chunks_num = (buckets_num + grain - 1) / grain;
+  r_list.offsets.assign(size_t(size) + 1, 0);
+  for (auto *scratch : { &r_list.chunk_indices, &r_list.chunk_rows }) {
+    if (int64_t(scratch->size()) < chunks_num) {
+      scratch->resize(size_t(chunks_num));
+    }
+  }
+  const float radius_sq = radius * radius;
+  parallel_for(buckets_num, grain, [&](const IndexRange range) {
+    std::vector<int32_t> &indices = r_list.chunk_indices[size_t(range.start / grain)];
+    std::vector<int32_t> &rows = r_list.chunk_rows[size_t(range.start / grain)];
+    indices.clear();
+    rows.clear();
+    std::vector<vec3> candidates;
+    std::vector<int32_t> candidate_ids;
+    for (int64_t b = range.start; b < range.one_after_last(); b++) {
+      const int32_t begin = bucket_offsets_[size_t(b)], end = bucket_offsets_[size_t(b) + 1];
+      for (int32_t k = begin; k < end; k++) {
+        /* Each cell of the bucket once (a bucket may hold several cells: hash collisions). */
+        const ivec3 cell = sorted_cells_[size_t(k)];
+        if (std::find(sorted_cells_.begin() + begin, sorted_cells_.begin() + k, cell) !=
+            sorted_cells_.begin() + k)
+        {
+          continue;
+        }
+        candidates.clear();
+        candidate_ids.clear();
+        for (int32_t dz = -1; dz <= 1; dz++) {
+          for (int32_t dy = -1; dy <= 1; dy++) {
+            for (int32_t dx = -1; dx <= 1; dx++) {
+              const ivec3 near = cell + ivec3(dx, dy, dz);
+              const uint32_t bucket = bucket_of_cell(near);
+              for (int32_t m = bucket_offsets_[bucket]; m < bucket_offsets_[bucket + 1]; m++) {
+                if (sorted_cells_[size_t(m)] == near) {
+                  candidates.push_back(sorted_points_[size_t(m)]);
+                  candidate_ids.push_back(sorted_indices_[size_t(m)]);
+                }
+              }
+            }
+          }
+        }
+        for (int32_t q = k; q < end; q++) {
+          if (sorted_cells_[size_t(q)] != cell) {
+            continue;
+          }
+          const int32_t i = sorted_indices_[size_t(q)];
+          const vec3 p = sorted_points_[size_t(q)];
+          /* Without a branch per candidate (a quarter of them are neighbours, at random):
+           * every candidate is written, the count moves past the neighbours only. */
+          const size_t before = indices.size();
+          indices.resize(before + candidates.size());
+          int32_t *out = indices.data() + before;
+          size_t count = 0;
+          for (size_t m = 0; m < candidates.size(); m++) {
+            const vec3 d = candidates[m] - p;
+            out[count] = candidate_ids[m];
+            count += size_t((glm::dot(d, d) < radius_sq) & (candidate_ids[m] != i));
+          }
+          indices.resize(before + count);
+          r_list.offsets[size_t(i) + 1] = int32_t(count);
+          rows.push_back(i);
+        }
+      }
+    }
+  });
+  for (int64_t i = 0; i < size; i++) {
+    r_list.offsets[size_t(i) + 1] += r_list.offsets[size_t(i)];
+  }
+  r_list.indices.resize(size_t(r_list.offsets[size_t(size)]));
+  parallel_for(chunks_num, 1, [&](const IndexRange range) {
+    for (int64_t c = range.start; c < range.one_after_last(); c++) {
+      const std::vector<int32_t> &indices = r_list.chunk_indices[size_t(c)];
+      size_t cursor = 0;
+      for (const int32_t i : r_list.chunk_rows[size_t(c)]) {
+        const int32_t count = r_list.offsets[size_t(i) + 1] - r_list.offsets[size_t(i)];
+        std::copy(indices.begin() + int64_t(cursor), indices.begin() + int64_t(cursor) + count,
+                  r_list.indices.begin() + r_list.offsets[size_t(i)]);
+        cursor += size_t(count);
+      }
+    }
+  });
+}
+
 void find_neighbors(const SpatialGrid &grid, const Span<vec3> query_points, const float radius,
                     const bool exclude_self, NeighborList &r_list)
 {
   assert(radius <= grid.cell_size() * 1.0001f);
+  if (exclude_self && query_points.data() == grid.points().data() &&
+      query_points.size() == grid.points().size())
+  {
+    grid.own_neighbors(radius, r_list);
+    return;
+  }
   const int64_t size = query_points.size();
   const int64_t grain = 512;
   const int64_t chunks_num = std::max<int64_t>(1, (size + grain - 1) / grain);

@@ -11,6 +11,8 @@
 
 namespace hairdyn {
 
+struct NeighborList;
+
 class SpatialGrid {
  public:
   /* Sorts `points` into cells of edge `cell_size` (> 0). Queries of radius ≤ cell_size visit
@@ -48,6 +50,11 @@ class SpatialGrid {
   float cell_size() const { return cell_size_; }
   Span<vec3> points() const { return points_; }
 
+  /* find_neighbors of the grid's own points (i not its own neighbour), cell by cell: the
+   * points of the 27 cells around a cell are gathered once, into contiguous arrays, for all the
+   * points of that cell. */
+  void own_neighbors(float radius, NeighborList &r_list) const;
+
  private:
   ivec3 cell_of(const vec3 &p) const;
   uint32_t bucket_of_cell(const ivec3 &cell) const
@@ -75,8 +82,9 @@ class SpatialGrid {
 struct NeighborList {
   std::vector<int32_t> offsets;
   std::vector<int32_t> indices;
-  /* Per-chunk scratch for the parallel fill. */
-  std::vector<std::vector<int32_t>> chunk_indices;
+  /* Per-chunk scratch for the parallel fill: the rows' neighbours, and (when rows are filled
+   * out of order) the point of each row. */
+  std::vector<std::vector<int32_t>> chunk_indices, chunk_rows;
 
   Span<int32_t> neighbors_of(const int64_t i) const
   {
