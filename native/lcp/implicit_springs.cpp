@@ -17,9 +17,10 @@ void ImplicitSprings::pressure_rates(const Span<vec3> d)
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       float rate = 0.0f; /* (J d)_i = Σ_j g_ij · (d_i − d_j) */
       for (int32_t e = jacobian.offsets[size_t(i)]; e < jacobian.offsets[size_t(i) + 1]; e++) {
-        rate += glm::dot(jacobian.gradients[size_t(e)], d[i] - d[jacobian.partners[size_t(e)]]);
+        const DensityJacobian::Entry &entry = jacobian.entries[size_t(e)];
+        rate += glm::dot(entry.gradient, d[i] - d[entry.partner]);
       }
-      pressure_rates_[size_t(i)] = jacobian.kappa[size_t(i)] * rate;
+      pressure_rates_[size_t(i)] = jacobian.kappa[size_t(i)] / masses_[i] * rate;
     }
   });
 }
@@ -27,15 +28,16 @@ void ImplicitSprings::pressure_rates(const Span<vec3> d)
 vec3 ImplicitSprings::pressure_row(const Span<vec3> d, const int64_t i) const
 {
   const DensityJacobian &jacobian = *pressure_;
-  const float t_i = pressure_rates_[size_t(i)];
-  vec3 row(0.0f); /* (Jᵀ t)_i = Σ_j g_ij (t_i + (m_i/m_j) t_j), and the pair springs */
+  /* pressure_rates_ holds t / m: (Jᵀ t)_i = Σ_j g_ij m_i (t_i/m_i + t_j/m_j), and the pair
+   * springs. */
+  const float m_i = masses_[i], rate_i = pressure_rates_[size_t(i)];
+  vec3 row(0.0f);
   for (int32_t e = jacobian.offsets[size_t(i)]; e < jacobian.offsets[size_t(i) + 1]; e++) {
-    const int32_t j = jacobian.partners[size_t(e)];
-    const vec3 &g = jacobian.gradients[size_t(e)];
-    const vec3 d_ij = d[i] - d[j];
-    row += g * (t_i + masses_[i] / masses_[j] * pressure_rates_[size_t(j)] +
-                jacobian.along[size_t(e)] * glm::dot(g, d_ij)) +
-           jacobian.across[size_t(e)] * d_ij;
+    const DensityJacobian::Entry &entry = jacobian.entries[size_t(e)];
+    const vec3 d_ij = d[i] - d[entry.partner];
+    row += entry.gradient * (m_i * (rate_i + pressure_rates_[size_t(entry.partner)]) +
+                             entry.along * glm::dot(entry.gradient, d_ij)) +
+           entry.across * d_ij;
   }
   return dt_ * dt_ * row;
 }
@@ -163,13 +165,13 @@ ImplicitSprings::Result ImplicitSprings::step(
         vec3 own(0.0f);
         mat3 others(0.0f);
         for (int32_t e = pressure->offsets[size_t(i)]; e < pressure->offsets[size_t(i) + 1]; e++) {
-          const int32_t j = pressure->partners[size_t(e)];
-          const vec3 &g = pressure->gradients[size_t(e)];
+          const DensityJacobian::Entry &entry = pressure->entries[size_t(e)];
+          const vec3 &g = entry.gradient;
           own += g;
-          const float scale = masses[i] / masses[j];
-          others += (pressure->kappa[size_t(j)] * scale * scale + pressure->along[size_t(e)]) *
+          const float scale = masses[i] / masses[entry.partner];
+          others += (pressure->kappa[size_t(entry.partner)] * scale * scale + entry.along) *
                         glm::outerProduct(g, g) +
-                    mat3(pressure->across[size_t(e)]);
+                    mat3(entry.across);
         }
         diagonal += dt * dt * (pressure->kappa[size_t(i)] * glm::outerProduct(own, own) + others);
       }

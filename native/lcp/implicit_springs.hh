@@ -60,7 +60,7 @@ class ImplicitSprings {
  private:
   /* r_product = (M + Δt C + Δt² K) d for the pair blocks of the last step(). */
   double multiply_dot(Span<vec3> d, MutableSpan<vec3> r_product);
-  /* pressure_rates_ = κ J d, the first half of K_p d. */
+  /* pressure_rates_ = κ J d / m, the first half of K_p d. */
   void pressure_rates(Span<vec3> d);
   /* Row i of Δt² K_p d (Jᵀ pressure_rates_ and the pair springs), the pressure's part of the
    * product; pressure_rates(d) first. */

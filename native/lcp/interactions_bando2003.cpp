@@ -129,11 +129,7 @@ void compute_density_jacobian(const Span<vec3> positions, const Span<float> mass
   for (int64_t i = 0; i < n; i++) {
     r_jacobian.offsets[size_t(i) + 1] += r_jacobian.offsets[size_t(i)];
   }
-  const size_t entries_num = size_t(r_jacobian.offsets[size_t(n)]);
-  r_jacobian.partners.resize(entries_num);
-  r_jacobian.gradients.resize(entries_num);
-  r_jacobian.along.resize(entries_num);
-  r_jacobian.across.resize(entries_num);
+  r_jacobian.entries.resize(size_t(r_jacobian.offsets[size_t(n)]));
   const std::vector<float> &kappa = r_jacobian.kappa;
   parallel_for(n, 1024, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
@@ -149,11 +145,10 @@ void compute_density_jacobian(const Span<vec3> positions, const Span<float> mass
         const float c = kappa[size_t(i)] * (density[i] - rest_density) * masses[j] +
                         kappa[size_t(j)] * (density[j] - rest_density) * masses[i];
         const float g_sq = glm::dot(g, g);
-        r_jacobian.partners[size_t(e)] = j;
-        r_jacobian.gradients[size_t(e)] = g;
-        r_jacobian.along[size_t(e)] =
+        const float along =
             g_sq > 0.0f ? std::max(0.0f, c * sph_kernel_second_derivative(r, h)) / g_sq : 0.0f;
-        r_jacobian.across[size_t(e)] = std::max(0.0f, c * sph_kernel_derivative(r, h) / r);
+        const float across = std::max(0.0f, c * sph_kernel_derivative(r, h) / r);
+        r_jacobian.entries[size_t(e)] = { j, along, across, g };
         e++;
       }
     }

@@ -47,13 +47,17 @@ void accumulate_hair_interactions(Span<vec3> positions, Span<vec3> velocities,
  * springs keep theirs (lcp/implicit_springs.hh). Without them a compressed cluster (ρ ≫ ρ₀)
  * whose pairs sit in the kernel's convex tail (W'' > 0) overshoots at large steps. */
 struct DensityJacobian {
+  struct Entry {
+    int32_t partner; /* j */
+    /* The pair spring's positive parts: along x̂x̂ᵀ (over |g_ij|², so that along · g (g · d)
+     * is that term) and across I. */
+    float along, across;
+    vec3 gradient; /* g_ij */
+  };
   /* Compressed rows: the neighbours j of particle i within 2h₂ are
-   * partners[offsets[i] .. offsets[i + 1]), with g_ij in `gradients`, and the pair spring's
-   * positive parts: `along` (over |g_ij|², so that along · g (g · d) is its x̂x̂ᵀ term) and
-   * `across` (its I term). */
-  std::vector<int32_t> offsets, partners;
-  std::vector<vec3> gradients;
-  std::vector<float> along, across;
+   * entries[offsets[i] .. offsets[i + 1]). */
+  std::vector<int32_t> offsets;
+  std::vector<Entry> entries;
   std::vector<float> kappa; /* κ_i = m_i k_a / ρ_i² */
 };
 void compute_density_jacobian(Span<vec3> positions, Span<float> masses, Span<float> density,
