@@ -96,20 +96,10 @@ void SpatialGrid::own_neighbors(const float radius, NeighborList &r_list) const
         }
         candidates.clear();
         candidate_ids.clear();
-        for (int32_t dz = -1; dz <= 1; dz++) {
-          for (int32_t dy = -1; dy <= 1; dy++) {
-            for (int32_t dx = -1; dx <= 1; dx++) {
-              const ivec3 near = cell + ivec3(dx, dy, dz);
-              const uint32_t bucket = bucket_of_cell(near);
-              for (int32_t m = bucket_offsets_[bucket]; m < bucket_offsets_[bucket + 1]; m++) {
-                if (sorted_cells_[size_t(m)] == near) {
-                  candidates.push_back(sorted_points_[size_t(m)]);
-                  candidate_ids.push_back(sorted_indices_[size_t(m)]);
-                }
-              }
-            }
-          }
-        }
+        for_each_around_cell(cell, [&](const int64_t m) {
+          candidates.push_back(sorted_points_[size_t(m)]);
+          candidate_ids.push_back(sorted_indices_[size_t(m)]);
+        });
         for (int32_t q = k; q < end; q++) {
           if (sorted_cells_[size_t(q)] != cell) {
             continue;

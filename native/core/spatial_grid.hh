@@ -24,27 +24,13 @@ class SpatialGrid {
    * fixed order (the 27 cells around p in turn, then by index). */
   template<typename Fn> void for_each_in_radius(const vec3 &p, const float radius, Fn &&fn) const
   {
-    const ivec3 center = cell_of(p);
     const float radius_sq = radius * radius;
-    for (int32_t dz = -1; dz <= 1; dz++) {
-      for (int32_t dy = -1; dy <= 1; dy++) {
-        for (int32_t dx = -1; dx <= 1; dx++) {
-          const ivec3 cell = center + ivec3(dx, dy, dz);
-          const uint32_t bucket = bucket_of_cell(cell);
-          for (int32_t k = bucket_offsets_[bucket]; k < bucket_offsets_[bucket + 1]; k++) {
-            /* A bucket may hold other cells' points too (hash collisions): skip them, so
-             * that a bucket shared by two of the 27 cells yields each point once. */
-            if (sorted_cells_[size_t(k)] != cell) {
-              continue;
-            }
-            const vec3 d = sorted_points_[size_t(k)] - p;
-            if (glm::dot(d, d) < radius_sq) {
-              fn(sorted_indices_[size_t(k)]);
-            }
-          }
-        }
+    for_each_around_cell(cell_of(p), [&](const int64_t k) {
+      const vec3 d = sorted_points_[size_t(k)] - p;
+      if (glm::dot(d, d) < radius_sq) {
+        fn(sorted_indices_[size_t(k)]);
       }
-    }
+    });
   }
 
   float cell_size() const { return cell_size_; }
@@ -57,6 +43,26 @@ class SpatialGrid {
 
  private:
   ivec3 cell_of(const vec3 &p) const;
+  /* Calls fn(k) for the sorted position k of every point in the 27 cells around `center`, the
+   * cells in turn, then by index. */
+  template<typename Fn> void for_each_around_cell(const ivec3 &center, Fn &&fn) const
+  {
+    for (int32_t dz = -1; dz <= 1; dz++) {
+      for (int32_t dy = -1; dy <= 1; dy++) {
+        for (int32_t dx = -1; dx <= 1; dx++) {
+          const ivec3 cell = center + ivec3(dx, dy, dz);
+          const uint32_t bucket = bucket_of_cell(cell);
+          for (int32_t k = bucket_offsets_[bucket]; k < bucket_offsets_[bucket + 1]; k++) {
+            /* A bucket may hold other cells' points too (hash collisions): skip them, so
+             * that a bucket shared by two of the 27 cells yields each point once. */
+            if (sorted_cells_[size_t(k)] == cell) {
+              fn(int64_t(k));
+            }
+          }
+        }
+      }
+    }
+  }
   uint32_t bucket_of_cell(const ivec3 &cell) const
   {
     /* Teschner et al. 2003 spatial hash. */
