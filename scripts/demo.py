@@ -56,21 +56,20 @@ def bake(hair, out_dir, method, frames=None):
 def hair_material():
     """The Principled Hair BSDF (Chiang 2016 where the host has the choice), brown by
     melanin: one material for the groom and everything made from it."""
-    material = bpy.data.materials.new("hairdyn_demo_hair")
-    if material.node_tree is None:  # newer Blender gives every material its node tree
-        material.use_nodes = True
-    nodes = material.node_tree.nodes
-    nodes.clear()
-    hair = nodes.new("ShaderNodeBsdfHairPrincipled")
-    if "parametrization" in hair.bl_rna.properties:
-        hair.parametrization = 'MELANIN'
-    if "model" in hair.bl_rna.properties and 'CHIANG' in enum_items(hair, "model"):
-        hair.model = 'CHIANG'
-    hair.inputs["Melanin"].default_value = 0.55
-    hair.inputs["Roughness"].default_value = 0.35
-    output = nodes.new("ShaderNodeOutputMaterial")
-    material.node_tree.links.new(hair.outputs[0], output.inputs["Surface"])
-    return material
+    from hairdyn.methods.base import node_material
+
+    def build(nodes, links):
+        hair = nodes.new("ShaderNodeBsdfHairPrincipled")
+        if "parametrization" in hair.bl_rna.properties:
+            hair.parametrization = 'MELANIN'
+        if "model" in hair.bl_rna.properties and 'CHIANG' in enum_items(hair, "model"):
+            hair.model = 'CHIANG'
+        hair.inputs["Melanin"].default_value = 0.55
+        hair.inputs["Roughness"].default_value = 0.35
+        output = nodes.new("ShaderNodeOutputMaterial")
+        links.new(hair.outputs[0], output.inputs["Surface"])
+
+    return node_material("hairdyn_demo_hair", build)
 
 
 def use_material(obj, material):

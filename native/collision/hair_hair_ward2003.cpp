@@ -273,11 +273,7 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
             const size_t k = size_t(p - c);
             g.segment_curve[k] = int32_t(c);
             /* A strip segment's rectangle reaches its half width from the segment. */
-            const float r = (radii.is_empty() ? default_radius :
-                                                0.5f * (radii[p] + radii[p + 1])) +
-                            (half_widths.is_empty() ?
-                                 0.0f :
-                                 glm::length(0.5f * (half_widths[p] + half_widths[p + 1])));
+            const float r = segment_reach(radii, default_radius, half_widths, p);
             const vec3 a = positions[p], e = positions[p + 1];
             vec3 lo = glm::min(a, e), hi = glm::max(a, e);
             float sweep = 0.0f;
@@ -567,17 +563,14 @@ void respond(const PairContext &ctx, const int32_t pi, const int32_t pj, const C
   }
 }
 
-/* Segment p's swept-sphere radius: the mean of its nodes'. */
+/* Segment p's swept-sphere radius and strip half width (strands/substep_pass.hh). */
 inline float segment_radius(const PairContext &ctx, const int32_t p)
 {
-  return ctx.radii.is_empty() ? ctx.default_radius : 0.5f * (ctx.radii[p] + ctx.radii[p + 1]);
+  return segment_radius(ctx.radii, ctx.default_radius, p);
 }
-
-/* Segment p's half width across the strip it belongs to (zero: not a strip). */
 inline vec3 segment_half_width(const PairContext &ctx, const int32_t p)
 {
-  return ctx.half_widths.is_empty() ? vec3(0.0f) :
-                                      0.5f * (ctx.half_widths[p] + ctx.half_widths[p + 1]);
+  return segment_half_width(ctx.half_widths, p);
 }
 
 /* The closest points of two segments' cores: each a rectangle when it has a half width (a
@@ -625,7 +618,7 @@ float kept_distance(const PairContext &ctx, const int32_t pi, const int32_t pj,
 bool folded_back(const PairContext &ctx, const int32_t pi, const int32_t pj)
 {
   const auto reach = [&](const int32_t p) {
-    return segment_radius(ctx, p) + glm::length(segment_half_width(ctx, p));
+    return segment_reach(ctx.radii, ctx.default_radius, ctx.half_widths, p);
   };
   const float between = float(pj - pi - 1) * 0.5f *
                         (glm::length(ctx.x[pi + 1] - ctx.x[pi]) +

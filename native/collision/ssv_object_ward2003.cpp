@@ -284,13 +284,8 @@ void SsvObjectPass::apply(const SubstepState &state)
             original_base = x[k + 1];
             /* A strip's segment meets the body as the line swept sphere around its
              * rectangle swept sphere (its half width added): no part of the strip stays in. */
-            float r =
-                (state.radii.is_empty() ? params_.thickness :
-                                          0.5f * (state.radii[k] + state.radii[k + 1])) +
-                (state.strip_half_widths_hs.is_empty() ?
-                     0.0f :
-                     glm::length(0.5f * (state.strip_half_widths_hs[k] +
-                                         state.strip_half_widths_hs[k + 1])));
+            float r = segment_reach(state.radii, params_.thickness, state.strip_half_widths_hs,
+                                    int64_t(k));
             /* No farther out than its nodes were at rest (a group's skeleton nearer the body
              * than its radius, where its strands rest on it). */
             if (!state.rest_clearances.is_empty()) {

@@ -306,16 +306,10 @@ static float pressure_time_step(const LcpParams &params)
   return 0.6f * params.h2 / std::sqrt(params.pressure_stiffness);
 }
 
-/* s: the air particles of the wind (§3.5) cross at most their SPH support 2h a substep, so
- * that none skips the hair it passes through (explicit SPH air, hair-air drag); infinite
- * without wind. */
-static float wind_time_step(const LcpParams &params, const WindParams &wind)
+float LcpSolver::wind_time_step() const
 {
-  const float fastest = wind.speed * (1.0f + wind.turbulence);
-  if (!(fastest > 0.0f) || !(glm::length(wind.direction) > 0.0f)) {
-    return std::numeric_limits<float>::infinity();
-  }
-  return 2.0f * params.wind_particle_spacing / fastest;
+  return has_wind() ? 2.0f * params_.wind_particle_spacing / fastest_wind()
+                    : std::numeric_limits<float>::infinity();
 }
 
 /* Substeps of `dt_limit` in a frame, saturating far above any max_substeps. */
@@ -348,7 +342,7 @@ LcpSolver::SubstepEstimate LcpSolver::estimate_substeps(const float frame_dt) co
                   double(dt_pressure));
     estimate.reason = text;
   }
-  const float dt_wind = wind_time_step(params_, wind_params_);
+  const float dt_wind = wind_time_step();
   if (substeps_for(frame_dt, dt_wind) > estimate.count) {
     estimate.count = substeps_for(frame_dt, dt_wind);
     std::snprintf(text, sizeof(text),
@@ -599,8 +593,7 @@ void LcpSolver::accumulate_wind(const float dt, const HeadState &mid)
 
   /* SPH air: pressure with a sound speed of ten times the wind's fastest (weakly
    * compressible), capped by the step's stability limit 0.4 h / Δt. */
-  const float fastest = wind_params_.speed * (1.0f + wind_params_.turbulence);
-  const float sound_speed = std::min(10.0f * fastest, 0.4f * h / dt);
+  const float sound_speed = std::min(10.0f * fastest_wind(), 0.4f * h / dt);
   accumulate_air_pressure(air_x_wo_, air_mass, params_.air_density, sound_speed, h, air_neighbors_,
                           air_density_, air_forces_);
   /* Drag both ways (§3.5). */

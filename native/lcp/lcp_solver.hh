@@ -153,6 +153,12 @@ class LcpSolver {
   {
     return wind_params_.speed > 0.0f && glm::length(wind_params_.direction) > 0.0f;
   }
+  /* m/s, the wind's fastest: its speed with the turbulence on top. */
+  float fastest_wind() const { return wind_params_.speed * (1.0f + wind_params_.turbulence); }
+  /* s: the air particles of the wind (§3.5) cross at most their SPH support 2h a substep, so
+   * that none skips the hair it passes through (explicit SPH air, hair-air drag); infinite
+   * without wind. */
+  float wind_time_step() const;
   void collide_with_body(const HeadState &end);
   void update_world_outputs(const HeadState &head);
   void count_interpenetrations();

@@ -68,11 +68,8 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
 
 void LodSolver::set_colliders(const ColliderSet *colliders, const CollisionParams &params)
 {
-  colliders_ = colliders;
   solver_->set_colliders(colliders, params);
-  if (!solver_->passes().is_empty()) {
-    update_pass_volumes();
-  }
+  set_occluders(colliders);
 }
 
 void LodSolver::add_pass(SubstepPass *const pass, const float strand_radius)

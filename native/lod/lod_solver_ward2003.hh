@@ -59,7 +59,8 @@ class LodSolver {
   /* Hair-object collision of every skeleton (see StrandSolver::set_colliders), and the
    * bodies that occlude hair (§6.1). nullptr: neither. */
   void set_colliders(const ColliderSet *colliders, const CollisionParams &params);
-  /* Only the bodies that occlude hair (when the skeletons collide by a pass instead). */
+  /* Only the bodies that occlude hair (when the skeletons collide by a pass instead); they
+   * also give the passes' rest clearances. */
   void set_occluders(const ColliderSet *occluders)
   {
     colliders_ = occluders;

@@ -25,6 +25,26 @@ struct PassVolumes {
   std::vector<float> rest_clearances;
 };
 
+/* Segment p's (from point p to p + 1) swept-sphere radius: the mean of its nodes' radii, or
+ * `default_radius` when there are none. */
+inline float segment_radius(const Span<float> radii, const float default_radius, const int64_t p)
+{
+  return radii.is_empty() ? default_radius : 0.5f * (radii[p] + radii[p + 1]);
+}
+/* Segment p's half width across its strip, the mean of its nodes' (zero: not a strip). */
+inline vec3 segment_half_width(const Span<vec3> half_widths, const int64_t p)
+{
+  return half_widths.is_empty() ? vec3(0.0f) : 0.5f * (half_widths[p] + half_widths[p + 1]);
+}
+/* How far segment p's swept sphere reaches from its core segment: its radius, plus a strip's
+ * half width (the line swept sphere around its rectangle swept sphere). */
+inline float segment_reach(const Span<float> radii, const float default_radius,
+                           const Span<vec3> half_widths, const int64_t p)
+{
+  return segment_radius(radii, default_radius, p) +
+         glm::length(segment_half_width(half_widths, p));
+}
+
 struct SubstepState {
   float h = 0.0f;    /* s, the substep's length */
   float time = 0.0f; /* s, simulated time at its end */
@@ -53,7 +73,7 @@ struct SubstepState {
    * lies closer to the body than its radius where its strands rest on it). Empty: none. */
   Span<float> rest_clearances;
   /* The head at the end of the substep (grids that move with the head use it). */
-  mat4 head_to_world{1.0f};
+  mat4 head_to_world{ 1.0f };
 
   void set_volumes(const PassVolumes &volumes)
   {
