@@ -302,3 +302,84 @@ TEST(SsvObject, ASegmentDrapedOffABladeFromABaseRestingOnItIsResolved)
   EXPECT_GE(r.distance, 0.99f * 2e-4f);
   EXPECT_LT(r.stretch, 1e-6f);
 }
+
+namespace {
+
+/* Smallest core distance of a strip segment's rectangle (segment a–b widened by its half width
+ * made orthogonal to it, as the pass builds it) to any triangle of the collider. */
+float strip_mesh_distance(const Collider &collider, const vec3 &a, const vec3 &b,
+                          const vec3 &half_width)
+{
+  const RectSS rect =
+      RectSS::from_segment(a, b, half_width, 2.0f * glm::length(half_width), 0.0f);
+  float best = INFINITY;
+  for (const ivec3 &t : collider.triangles()) {
+    best = std::min(best, rectangle_triangle_distance(rect, collider.vertices()[t.x],
+                                                      collider.vertices()[t.y],
+                                                      collider.vertices()[t.z])
+                              .distance);
+  }
+  return best;
+}
+
+}  // namespace
+
+TEST(SsvObject, AStripSegmentIsItsRectangleSweptSphere)
+{
+  /* A strip segment (level of detail) sloping down over the 2 mm blade, its width tilted so
+   * that one long edge dips 1.7 mm into the blade while its core segment stays 3 mm above it.
+   * The rectangle is tested exactly: it is lifted just clear (its corner to the strip's
+   * radius above the top face), not as far as the line swept sphere around it (radius plus
+   * half width, 11.4 mm) would ask. */
+  ColliderSet colliders;
+  colliders.add(make_collider(test::box(vec3(0.05f, 0.05f, 0.001f)), mat4(1.0f)));
+  const Collider &blade = colliders.collider(0);
+  const vec3 half_width(0.0f, 0.01f, -0.005f);
+  Strand strand;
+  strand.positions = {vec3(0.0f, 0.0f, 0.012f), vec3(0.03f, 0.0f, 0.004f)};
+  strand.velocities = {vec3(0.0f), vec3(0.0f, 0.0f, -0.5f)};
+  strand.offsets.push_back(2);
+  const std::vector<vec3> half_widths{half_width, half_width};
+  const float length = glm::length(strand.positions[1] - strand.positions[0]);
+  ASSERT_GT(segment_mesh_distance(blade, strand.positions[0], strand.positions[1]), 0.0025f);
+  ASSERT_EQ(strip_mesh_distance(blade, strand.positions[0], strand.positions[1], half_width),
+            0.0f);
+
+  SweptSphereParams params;
+  params.body_collision = BodyCollision::SweptSpheres;
+  params.thickness = 2e-4f;
+  SsvObjectPass pass(&colliders, params);
+  SubstepState state = strand.state(0.02f);
+  state.strip_half_widths_hs = half_widths;
+  pass.apply(state);
+  const std::vector<vec3> &x = strand.positions;
+  EXPECT_GE(strip_mesh_distance(blade, x[0], x[1], half_width), 0.999f * params.thickness);
+  EXPECT_LT(strip_mesh_distance(blade, x[0], x[1], half_width), 2.0f * params.thickness)
+      << "lifted just clear";
+  EXPECT_LT(segment_mesh_distance(blade, x[0], x[1]), glm::length(half_width))
+      << "lifted as far as the bounding line swept sphere";
+  EXPECT_NEAR(glm::length(x[1] - x[0]), length, 1e-6f);
+  EXPECT_EQ(pass.stats().pushed_num, 1);
+  EXPECT_EQ(pass.stats().unresolved_num, 0);
+  EXPECT_GE(strand.velocities[1].z, 0.0f) << "no velocity into the blade";
+
+  /* The same strip flat, 3 mm over the blade: its rectangle is clear of it by more than the
+   * radius and the threshold, so it is left alone (the bounding line swept sphere reaches
+   * 10 mm down). Turned with the head by a quarter turn about z, its width still lies flat. */
+  Strand flat;
+  flat.positions = {vec3(0.0f, 0.0f, 0.004f), vec3(0.03f, 0.0f, 0.004f)};
+  flat.velocities = {vec3(0.0f), vec3(0.0f)};
+  flat.offsets.push_back(2);
+  const std::vector<vec3> flat_widths(2, vec3(0.0f, 0.01f, 0.0f));
+  for (const float turn : {0.0f, 1.5707963f}) {
+    SsvObjectPass flat_pass(&colliders, params);
+    const std::vector<vec3> before = flat.positions;
+    SubstepState flat_state = flat.state(0.02f);
+    flat_state.strip_half_widths_hs = flat_widths;
+    flat_state.head_to_world = glm::rotate(mat4(1.0f), turn, vec3(0.0f, 0.0f, 1.0f));
+    flat_pass.apply(flat_state);
+    EXPECT_EQ(flat.positions, before);
+    EXPECT_EQ(flat_pass.stats().pushed_num, 0);
+    EXPECT_EQ(flat_pass.stats().near_num, 0);
+  }
+}

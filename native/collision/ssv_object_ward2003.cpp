@@ -1,10 +1,12 @@
 #include "collision/ssv_object_ward2003.hh"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
 
+#include "core/head_motion.hh"
 #include "core/parallel.hh"
 
 namespace hairdyn {
@@ -52,20 +54,26 @@ SsvBVH::SsvBVH(const Span<vec3> vertices, const Span<ivec3> triangles, const int
 }
 
 void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_distance,
-                              std::vector<TriangleContact> &r_contacts) const
+                              std::vector<TriangleContact> &r_contacts, const vec3 &side) const
 {
   if (nodes_.empty()) {
     return;
   }
-  /* The LSS of the query against each node's PSS (§5.4: "recursively traversing the BVH
-   * testing the hair's SSV against the bounding volumes"). */
+  const bool strip = side != vec3(0.0f);
+  const float side_len = glm::length(side);
+  const vec3 axis = b - a;
+  const float axis_sq = glm::dot(axis, axis);
+  /* The SSV of the query against each node's PSS (§5.4: "recursively traversing the BVH
+   * testing the hair's SSV against the bounding volumes"); a rectangle lies within its half
+   * width of its segment. */
   int32_t stack[64];
   int stack_size = 0;
   stack[stack_size++] = 0;
   while (stack_size > 0) {
     const int32_t node_index = stack[--stack_size];
     const Node &node = nodes_[size_t(node_index)];
-    if (point_segment_distance(node.volume.center, a, b).distance - node.volume.radius >
+    if (point_segment_distance(node.volume.center, a, b).distance - node.volume.radius -
+            side_len >
         max_distance)
     {
       continue;
@@ -79,7 +87,16 @@ void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_dist
     for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
       const int32_t t = leaf_triangles_[size_t(i)];
       const vec3 *c = corners(t);
-      const CoreDistance core = segment_triangle_distance(a, b, c[0], c[1], c[2]);
+      CoreDistance core;
+      if (strip) {
+        core = rectangle_triangle_distance({a - side, axis, 2.0f * side, 0.0f}, c[0], c[1], c[2]);
+        core.s = axis_sq > 0.0f ?
+                     std::clamp(glm::dot(core.point_a - a, axis) / axis_sq, 0.0f, 1.0f) :
+                     0.0f;
+      }
+      else {
+        core = segment_triangle_distance(a, b, c[0], c[1], c[2]);
+      }
       if (core.distance <= max_distance) {
         r_contacts.push_back({t, core});
       }
@@ -93,22 +110,50 @@ namespace {
  * with. */
 constexpr float min_lever = 0.05f;
 
-/* What one contact asks of a segment (object space): move the segment's point at
- * `s` by `need` along `direction` (need ≤ 0: within reach, not penetrating). */
+/* What one contact asks of a segment (object space): move the core's point at
+ * (`s`, `across`) (SegmentCore::at) by `need` along `direction` (need ≤ 0: within reach, not
+ * penetrating). */
 struct Push {
   float need = -std::numeric_limits<float>::infinity();
   vec3 direction{0.0f};
   float s = 0.0f;
-  /* Over a face: some of the segment above the face lies within the radius of its plane
-   * or in front of it. False when all of it lies farther behind (the far side of a thin
-   * body, outside it). */
+  /* Over a face: some of the core above the face lies within the radius of its plane or in
+   * front of it. False when all of it lies farther behind (the far side of a thin body,
+   * outside it). */
   bool reaches_face = true;
+  float across = 0.0f;
 };
 
-/* §5.4: the penetration of segment a–b (radius r) into the body at one triangle, and the
- * direction to push it: over the face, the face's normal and the depth of the segment's
- * deepest point over the face; at an edge or corner, along the closest-point vector. */
-Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const SsvBVH &bvh,
+/* The core of a segment's swept sphere (§5.2): the segment a–b, or a strip's rectangle, the
+ * segment widened by `side` (orthogonal to it) both ways. */
+struct SegmentCore {
+  vec3 a, b;
+  vec3 side{0.0f};
+
+  vec3 at(const float s, const float across) const { return a + s * (b - a) + across * side; }
+  /* The `across` of a point of the rectangle. */
+  float across_of(const vec3 &p) const
+  {
+    const float side_sq = glm::dot(side, side);
+    return side_sq > 0.0f ? glm::dot(p - a, side) / side_sq : 0.0f;
+  }
+};
+
+/* A strip's side across segment a–b: its half width made orthogonal to the segment, its length
+ * kept (as RectSS::from_segment makes the rectangle). Zero stays zero. */
+vec3 strip_side(const vec3 &half_width, const vec3 &a, const vec3 &b)
+{
+  if (half_width == vec3(0.0f)) {
+    return half_width;
+  }
+  return 0.5f *
+         RectSS::from_segment(a, b, half_width, 2.0f * glm::length(half_width), 0.0f).edge_v;
+}
+
+/* §5.4: the penetration of a segment's core (radius r) into the body at one triangle, and the
+ * direction to push it: over the face, the face's normal and the depth of the core's deepest
+ * point over the face; at an edge or corner, along the closest-point vector. */
+Push push_out_of_triangle(const SegmentCore &core, const float r, const SsvBVH &bvh,
                           const TriangleContact &contact)
 {
   Push push;
@@ -117,28 +162,62 @@ Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const Ssv
   if (n == vec3(0.0f)) {
     return push;
   }
-  /* Clip the segment to the triangle's prism along n. */
-  float s0 = 0.0f, s1 = 1.0f;
-  for (int k = 0; k < 3 && s0 <= s1; k++) {
-    const vec3 inward = glm::cross(n, t[(k + 1) % 3] - t[k]);
-    const float f0 = glm::dot(a - t[k], inward), f1 = glm::dot(b - t[k], inward);
-    if (f0 < 0.0f && f1 < 0.0f) {
-      s0 = 2.0f;
-    }
-    else if (f0 < 0.0f) {
-      s0 = std::max(s0, f0 / (f0 - f1));
-    }
-    else if (f1 < 0.0f) {
-      s1 = std::min(s1, f0 / (f0 - f1));
-    }
+  /* The core's corners (a segment: its two ends, a polygon of two) clipped to the triangle's
+   * prism along n (Sutherland–Hodgman; each of the three planes adds at most one corner). */
+  struct Corner {
+    float s, across;
+  };
+  std::array<Corner, 8> polygon, clipped;
+  int corners_num = 0;
+  if (core.side == vec3(0.0f)) {
+    polygon[0] = {0.0f, 0.0f};
+    polygon[1] = {1.0f, 0.0f};
+    corners_num = 2;
   }
-  if (s0 <= s1) {
-    const float h0 = glm::dot(a + s0 * (b - a) - t[0], n);
-    const float h1 = glm::dot(a + s1 * (b - a) - t[0], n);
-    push.s = h0 < h1 ? s0 : s1;
-    push.need = r - std::min(h0, h1);
+  else {
+    polygon[0] = {0.0f, -1.0f};
+    polygon[1] = {1.0f, -1.0f};
+    polygon[2] = {1.0f, 1.0f};
+    polygon[3] = {0.0f, 1.0f};
+    corners_num = 4;
+  }
+  for (int k = 0; k < 3 && corners_num > 0; k++) {
+    const vec3 inward = glm::cross(n, t[(k + 1) % 3] - t[k]);
+    const auto side_of = [&](const Corner &c) {
+      return glm::dot(core.at(c.s, c.across) - t[k], inward);
+    };
+    int kept = 0;
+    for (int i = 0; i < corners_num; i++) {
+      const Corner &p = polygon[size_t(i)], &q = polygon[size_t((i + 1) % corners_num)];
+      const float fp = side_of(p), fq = side_of(q);
+      if (fp >= 0.0f) {
+        clipped[size_t(kept++)] = p;
+      }
+      if ((fp >= 0.0f) != (fq >= 0.0f)) {
+        const float w = fp / (fp - fq);
+        clipped[size_t(kept++)] = {p.s + w * (q.s - p.s), p.across + w * (q.across - p.across)};
+      }
+    }
+    polygon = clipped;
+    corners_num = kept;
+  }
+  if (corners_num > 0) {
+    /* The deepest corner (of equal ones the farthest along: the longest lever). */
+    float lowest = std::numeric_limits<float>::infinity();
+    float highest = -lowest;
+    for (int i = 0; i < corners_num; i++) {
+      const Corner &c = polygon[size_t(i)];
+      const float height = glm::dot(core.at(c.s, c.across) - t[0], n);
+      highest = std::max(highest, height);
+      if (height < lowest || (height == lowest && c.s > push.s)) {
+        lowest = height;
+        push.s = c.s;
+        push.across = c.across;
+      }
+    }
+    push.need = r - lowest;
     push.direction = n;
-    push.reaches_face = std::max(h0, h1) >= -r;
+    push.reaches_face = highest >= -r;
     return push;
   }
   const float d = contact.core.distance;
@@ -147,9 +226,10 @@ Push push_out_of_triangle(const vec3 &a, const vec3 &b, const float r, const Ssv
     push.direction = away / d;
     push.need = r - d;
   }
-  /* A segment through the triangle's edge (d = 0) pierces a neighbour's face: that face's
-   * prism gives its push. */
+  /* A core through the triangle's edge (d = 0) pierces a neighbour's face: that face's prism
+   * gives its push. */
   push.s = contact.core.s;
+  push.across = core.across_of(contact.core.point_a);
   return push;
 }
 
@@ -237,9 +317,12 @@ void SsvObjectPass::apply(const SubstepState &state)
   const MutableSpan<vec3> x = state.positions_wo;
   const MutableSpan<vec3> v = state.velocities_wo;
   const bool have_previous = int64_t(previous_velocities_.size()) == v.size();
+  /* Strips' half widths turn with the head. */
+  const mat3 head_turn = HeadPose::from_matrix(state.head_to_world).rotation_matrix();
   const auto keep_previous = [&]() {
     previous_velocities_.assign(v.begin(), v.end());
     previous_positions_.assign(x.begin(), x.end());
+    previous_head_turn_ = head_turn;
   };
   if (!params_.uses_swept_spheres() || colliders_ == nullptr || bodies_.empty()) {
     keep_previous();
@@ -282,10 +365,10 @@ void SsvObjectPass::apply(const SubstepState &state)
             const vec3 base_before = original_base;
             const float length = glm::length(x[k + 1] - base_before);
             original_base = x[k + 1];
-            /* A strip's segment meets the body as the line swept sphere around its
-             * rectangle swept sphere (its half width added): no part of the strip stays in. */
-            float r = segment_reach(state.radii, params_.thickness, state.strip_half_widths_hs,
-                                    int64_t(k));
+            /* A strip's segment meets the body as its rectangle swept sphere (§5.2): the
+             * segment widened by its half width both ways, grown by its radius. */
+            float r = segment_radius(state.radii, params_.thickness, int64_t(k));
+            const vec3 half_width_hs = segment_half_width(state.strip_half_widths_hs, int64_t(k));
             /* No farther out than its nodes were at rest (a group's skeleton nearer the body
              * than its radius, where its strands rest on it). */
             if (!state.rest_clearances.is_empty()) {
@@ -307,8 +390,15 @@ void SsvObjectPass::apply(const SubstepState &state)
             const float swept = h * std::max(glm::length(v[k]), glm::length(v[k + 1]));
             bool pushed = false, resolved = false;
             Push deepest_wo;
+            /* The strip's side where it was at the substep's start. */
+            const vec3 side_before_wo =
+                have_previous ? strip_side(previous_head_turn_ * half_width_hs,
+                                           previous_positions_[size_t(k)],
+                                           previous_positions_[size_t(k) + 1]) :
+                                strip_side(head_turn * half_width_hs, a, x[k + 1]);
             for (int iteration = 0; iteration <= iterations_num; iteration++) {
               const vec3 b = x[k + 1];
+              const vec3 side_wo = strip_side(head_turn * half_width_hs, a, b);
               /* Faces met from behind count only when no face within reach was met from the
                * front (the segment was inside before: it still goes out along the normal). */
               Candidates front(r), behind(r);
@@ -316,12 +406,13 @@ void SsvObjectPass::apply(const SubstepState &state)
                 const Frame &f = frames[i];
                 const vec3 a_o = transform_point(f.world_to_object, a);
                 const vec3 b_o = transform_point(f.world_to_object, b);
+                const SegmentCore core{a_o, b_o, mat3(f.world_to_object) * side_wo};
                 const float r_o = r / f.scale;
                 contacts.clear();
                 bodies_[i].bvh.segment_contacts(a_o, b_o, (r + threshold + swept) / f.scale,
-                                                contacts);
+                                                contacts, core.side);
                 for (const TriangleContact &contact : contacts) {
-                  const Push push = push_out_of_triangle(a_o, b_o, r_o, bodies_[i].bvh, contact);
+                  const Push push = push_out_of_triangle(core, r_o, bodies_[i].bvh, contact);
                   if (push.need > -std::numeric_limits<float>::infinity()) {
                     /* Only faces the segment met from their front at the substep's start:
                      * its point closest to the triangle was in front then. A segment whose
@@ -331,19 +422,22 @@ void SsvObjectPass::apply(const SubstepState &state)
                      * also have had the point the push moves in front. */
                     const vec3 *t = bodies_[i].bvh.corners(contact.triangle);
                     const vec3 &n_o = bodies_[i].bvh.normal(contact.triangle);
-                    const auto was_in_front = [&](const float s) {
+                    const auto was_in_front = [&](const float s, const float across) {
                       /* Where the point was at the substep's start: as the last substep
                        * left it, or (on the first) back along its velocity. */
                       const vec3 p_before_wo =
-                          have_previous ? glm::mix(previous_positions_[size_t(k)],
-                                                   previous_positions_[size_t(k) + 1], s) :
-                                          glm::mix(a, b, s) - h * glm::mix(v[k], v[k + 1], s);
+                          (have_previous ?
+                               glm::mix(previous_positions_[size_t(k)],
+                                        previous_positions_[size_t(k) + 1], s) :
+                               glm::mix(a, b, s) - h * glm::mix(v[k], v[k + 1], s)) +
+                          across * side_before_wo;
                       const vec3 p_before_o =
                           transform_point(f.previous_world_to_object, p_before_wo);
                       return glm::dot(p_before_o - t[0], n_o) >= -r_o;
                     };
-                    const bool from_front = was_in_front(contact.core.s) &&
-                                            (push.reaches_face || was_in_front(push.s));
+                    const bool from_front =
+                        was_in_front(contact.core.s, core.across_of(contact.core.point_a)) &&
+                        (push.reaches_face || was_in_front(push.s, push.across));
                     /* The base is placed: an overlap within the radius at the base (the
                      * base resting on the surface) is contact, not a penetration a turn
                      * about the base could remove; taken as the shallowest it would use up

@@ -27,9 +27,11 @@
  *   friction μ_f opposes the tangential motion with the magnitude μ_f |a_t| h of the tangential
  *   acceleration a_t (measured from the velocities of the previous substep), never reversing
  *   it (§5.4).
- * A strip's segment (level of detail) is tested as the line swept sphere that bounds its
- * rectangle swept sphere (radius plus half width), which keeps the guarantee below for the
- * whole strip; the exact rectangle–triangle response is not done. With rest clearances
+ * A strip's segment (level of detail) is its rectangle swept sphere (§5.2: the segment widened
+ * by the strip's half width both ways, grown by its radius), tested exactly against the
+ * triangles (rectangle–triangle distance) and pushed by its deepest point over a face (the
+ * rectangle clipped to the face's prism), its tip turned about its base as a strand's; the
+ * strip's width direction turns with the head. With rest clearances
  * (SubstepState) a segment is held no farther out than its nodes lay at rest, up to its
  * radius: a group's skeleton rests nearer the body than the group is thick.
  * Order (§5.5): after hair–hair (a soft constraint), this pass is the hard one: no segment
@@ -60,9 +62,12 @@ class SsvBVH {
   bool is_empty() const { return nodes_.empty(); }
   int64_t nodes_num() const { return int64_t(nodes_.size()); }
   /* Every triangle whose distance to the segment a–b is at most max_distance, appended to
-   * r_contacts (not cleared), in the hierarchy's order. */
+   * r_contacts (not cleared), in the hierarchy's order. With a non-zero `side` (orthogonal
+   * to b − a), to the rectangle the segment spans widened by it both ways (a strip's core,
+   * §5.2) instead; the contacts' core.s is then point_a's parameter along a–b. */
   void segment_contacts(const vec3 &a, const vec3 &b, float max_distance,
-                        std::vector<TriangleContact> &r_contacts) const;
+                        std::vector<TriangleContact> &r_contacts,
+                        const vec3 &side = vec3(0.0f)) const;
   /* Unit outward normal of the triangle (zero for a degenerate one), and a corner. */
   const vec3 &normal(const int32_t triangle) const { return normals_[size_t(triangle)]; }
   const vec3 *corners(const int32_t triangle) const { return &corners_[size_t(triangle) * 3]; }
@@ -115,6 +120,7 @@ class SsvObjectPass : public SubstepPass {
   std::vector<Body> bodies_;
   std::vector<vec3> previous_velocities_; /* per point, at the end of the last apply */
   std::vector<vec3> previous_positions_;  /* per point, at the end of the last apply */
+  mat3 previous_head_turn_{1.0f};         /* the head's rotation then */
   HairObjectStats stats_;
 };
 
