@@ -435,38 +435,51 @@ void LodSolver::place_strands(const float frame_dt)
   const float tau = lod_params_.transition_time;
   const float decay = tau > 0.0f ? std::exp(-frame_dt / tau) : 0.0f;
   const Span<int32_t> offsets = hierarchy_.curve_offsets();
-  parallel_for(hierarchy_.strands_num(), 128, [&](const IndexRange range) {
-    for (int64_t strand = range.start; strand < range.one_after_last(); strand++) {
-      const IndexRange points = curve_points(offsets, strand);
-      const MutableSpan<vec3> out(positions_wo_.data() + points.start, points.size);
-      const MutableSpan<vec3> residual(residuals_wo_.data() + points.start, points.size);
-      const int32_t node = strand_nodes_[size_t(strand)];
-      const int32_t old_node = placed_nodes_[size_t(strand)];
-      if (old_node != node && tau > 0.0f) {
-        /* §6.3: the jump between the old and the new skeleton's placement is kept, and the
-         * spring pulls it to zero over the next frames. */
-        skin_strand(hierarchy_, old_node, strand, skeleton(old_node), frames(old_node), out);
-        for (int64_t i = 0; i < points.size; i++) {
-          residual[i] = decay * residual[i] + out[i];
+  /* Strands four at a time: keep_segment_lengths overlaps their chains. */
+  constexpr int64_t group = 4;
+  const int64_t strands_num = hierarchy_.strands_num();
+  parallel_for((strands_num + group - 1) / group, 32, [&](const IndexRange groups) {
+    for (int64_t first = groups.start * group;
+         first < std::min(strands_num, groups.one_after_last() * group); first += group)
+    {
+      const int strands_in_group = int(std::min(group, strands_num - first));
+      Span<float> rest_lengths[group];
+      MutableSpan<vec3> placed[group];
+      for (int g = 0; g < strands_in_group; g++) {
+        const int64_t strand = first + g;
+        const IndexRange points = curve_points(offsets, strand);
+        const MutableSpan<vec3> out(positions_wo_.data() + points.start, points.size);
+        const MutableSpan<vec3> residual(residuals_wo_.data() + points.start, points.size);
+        const int32_t node = strand_nodes_[size_t(strand)];
+        const int32_t old_node = placed_nodes_[size_t(strand)];
+        if (old_node != node && tau > 0.0f) {
+          /* §6.3: the jump between the old and the new skeleton's placement is kept, and the
+           * spring pulls it to zero over the next frames. */
+          skin_strand(hierarchy_, old_node, strand, skeleton(old_node), frames(old_node), out);
+          for (int64_t i = 0; i < points.size; i++) {
+            residual[i] = decay * residual[i] + out[i];
+          }
+          skin_strand(hierarchy_, node, strand, skeleton(node), frames(node), out);
+          for (int64_t i = 0; i < points.size; i++) {
+            residual[i] -= out[i];
+            out[i] += residual[i];
+          }
         }
-        skin_strand(hierarchy_, node, strand, skeleton(node), frames(node), out);
-        for (int64_t i = 0; i < points.size; i++) {
-          residual[i] -= out[i];
-          out[i] += residual[i];
+        else {
+          skin_strand(hierarchy_, node, strand, skeleton(node), frames(node), out);
+          for (int64_t i = 0; i < points.size; i++) {
+            residual[i] *= decay;
+            out[i] += residual[i];
+          }
         }
-      }
-      else {
-        skin_strand(hierarchy_, node, strand, skeleton(node), frames(node), out);
+        rest_lengths[g] = Span<float>(rest_lengths_).slice(points.start, points.size);
+        placed[g] = out;
         for (int64_t i = 0; i < points.size; i++) {
-          residual[i] *= decay;
-          out[i] += residual[i];
+          point_levels_[size_t(points.start + i)] = hierarchy_.depth(node);
         }
+        placed_nodes_[size_t(strand)] = node;
       }
-      keep_segment_lengths(Span<float>(rest_lengths_).slice(points.start, points.size), out);
-      for (int64_t i = 0; i < points.size; i++) {
-        point_levels_[size_t(points.start + i)] = hierarchy_.depth(node);
-      }
-      placed_nodes_[size_t(strand)] = node;
+      keep_segment_lengths(rest_lengths, placed, strands_in_group);
     }
   });
 }

@@ -1,5 +1,8 @@
 #include "lod/skinning_ward2003.hh"
 
+#include <algorithm>
+#include <cassert>
+
 #include "groom/frames.hh"
 #include "groom/groom.hh"
 
@@ -35,11 +38,32 @@ void skin_strand(const LodHierarchy &hierarchy, const int64_t node, const int64_
 
 void keep_segment_lengths(const Span<float> rest_lengths, const MutableSpan<vec3> r_positions_wo)
 {
-  for (int64_t i = 1; i < r_positions_wo.size(); i++) {
-    const vec3 along = r_positions_wo[i] - r_positions_wo[i - 1];
-    const float length = glm::length(along);
-    if (length > 1e-6f * rest_lengths[i]) { /* a point on its parent keeps its place */
-      r_positions_wo[i] = r_positions_wo[i - 1] + (rest_lengths[i] / length) * along;
+  keep_segment_lengths(&rest_lengths, &r_positions_wo, 1);
+}
+
+void keep_segment_lengths(const Span<float> *rest_lengths, const MutableSpan<vec3> *r_positions_wo,
+                          const int strands_num)
+{
+  assert(strands_num <= 4);
+  int64_t points_num = 0;
+  for (int s = 0; s < strands_num; s++) {
+    points_num = std::max(points_num, r_positions_wo[s].size());
+  }
+  /* Each strand's chain of square roots and divisions is serial; the strands' chains are
+   * interleaved point by point so that the processor overlaps them (the same operations per
+   * strand as one at a time). */
+  for (int64_t i = 1; i < points_num; i++) {
+    for (int s = 0; s < strands_num; s++) {
+      const MutableSpan<vec3> x = r_positions_wo[s];
+      if (i >= x.size()) {
+        continue;
+      }
+      const float rest_length = rest_lengths[s][i];
+      const vec3 along = x[i] - x[i - 1];
+      const float length = glm::length(along);
+      if (length > 1e-6f * rest_length) { /* a point on its parent keeps its place */
+        x[i] = x[i - 1] + (rest_length / length) * along;
+      }
     }
   }
 }

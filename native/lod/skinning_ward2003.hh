@@ -33,6 +33,10 @@ void skin_strand(const LodHierarchy &hierarchy, int64_t node, int64_t strand,
  * segments' frames; on wide strips that is several times a segment. `rest_lengths` holds each
  * point's distance to the previous point at rest (the root's is unused). */
 void keep_segment_lengths(Span<float> rest_lengths, MutableSpan<vec3> r_positions_wo);
+/* The same for up to four strands at once (faster: their serial chains overlap), each with the
+ * same result as alone. */
+void keep_segment_lengths(const Span<float> *rest_lengths, const MutableSpan<vec3> *r_positions_wo,
+                          int strands_num);
 
 /* §6.2: a child's control points on its parent's current skeleton and frames, by the child's
  * stored offsets. */
