@@ -75,8 +75,11 @@ def test_lcp_needs_a_scalp(open_fixture):
 
 def test_lcp_bad_values_are_refused(open_fixture):
     hair = lcp_hair(open_fixture, "head_curves.blend")
-    with pytest.raises(cli.UsageError, match="h2 must be between"):
+    with pytest.raises(cli.UsageError, match="h2 must be between 1e-05 and 1 m, not 0"):
         cli.apply_settings(hair.hairdyn, ["h2=0"])
+    # A value the panel shows in another unit than the solver's is refused in the panel's.
+    with pytest.raises(cli.UsageError, match="thickness must be between 0 and 100 mm, not -1"):
+        cli.apply_settings(hair.hairdyn, ["swept_spheres.thickness=-1"])
     with pytest.raises(cli.UsageError, match="there is no image named 'Nope'"):
         cli.apply_settings(hair.hairdyn, ["length_image=Nope"])
     hair.hairdyn.lcp.particle_spacing = 0.9  # larger than the head: no particle fits

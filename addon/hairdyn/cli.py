@@ -81,8 +81,9 @@ def _as_stored(value, kind):
     return struct.unpack("f", struct.pack("f", value))[0]
 
 
-def _parse_value(prop, text):
-    """Text -> a value for the RNA property `prop`, or UsageError."""
+def _parse_value(prop, text, unit=""):
+    """Text -> a value for the RNA property `prop` (in `unit`, named when out of range), or
+    UsageError."""
     kind = prop.type
     if kind == 'BOOLEAN':
         lowered = text.strip().lower()
@@ -104,8 +105,9 @@ def _parse_value(prop, text):
                              f"not '{text}'") from None
         for value in values:
             if not (prop.hard_min <= _as_stored(value, kind) <= prop.hard_max):
+                unit_text = f" {unit}" if unit else ""
                 raise UsageError(f"{prop.identifier} must be between {prop.hard_min:g} and "
-                                 f"{prop.hard_max:g}, not {text}")
+                                 f"{prop.hard_max:g}{unit_text}, not {text}")
         return values if prop.array_length else values[0]
     if kind == 'ENUM':
         identifiers = [item.identifier for item in prop.enum_items]
@@ -173,7 +175,10 @@ def apply_settings(settings, assignments):
         if prop.type == 'COLLECTION':
             _set_colliders(group, prop, text)
             continue
-        value = _parse_value(prop, text)
+        from hairdyn import native, parameters
+
+        value = _parse_value(prop, text, parameters.shown_unit(group, prop.identifier,
+                                                               native.load()))
         try:
             setattr(group, prop.identifier, value)
         except (TypeError, ValueError) as error:

@@ -54,6 +54,16 @@ def tooltip(field):
     return f"{head}: {field['description']}" if head else field["description"]
 
 
+def shown_unit(group, name, module):
+    """The unit a generated group's property `name` holds its value in (the panel's: mm for a
+    thickness the solver takes in m), or "" for any other property or a unitless one."""
+    params_class = native_structs(module).get(struct_name(group))
+    for field in shown_fields(params_class) if params_class is not None else ():
+        if field["name"] == name:
+            return field["display_unit"] if field["display_scale"] != 1.0 else field["unit"]
+    return ""
+
+
 def _finite(value, scale=1.0):
     return value * scale if math.isfinite(value) else None
 
