@@ -234,6 +234,40 @@ void TriangleBVH::ray_hits(const vec3 &origin, const vec3 &direction, const floa
   });
 }
 
+bool TriangleBVH::ray_hits_any(const vec3 &origin, const vec3 &direction,
+                               const float t_max) const
+{
+  if (nodes_.empty()) {
+    return false;
+  }
+  const vec3 inv_dir = safe_inverse(direction);
+  /* Median splits: the depth is log2 of the triangles, far below the stack's size. */
+  int32_t stack[64];
+  int stack_size = 0;
+  stack[stack_size++] = 0;
+  while (stack_size > 0) {
+    const int32_t node_index = stack[--stack_size];
+    const Node &node = nodes_[size_t(node_index)];
+    float t_near, t_far;
+    if (!ray_box(origin, inv_dir, node.min, node.max, t_max, t_near, t_far)) {
+      continue;
+    }
+    if (node.count == 0) {
+      stack[stack_size++] = node.first_or_right;
+      stack[stack_size++] = node_index + 1;
+      continue;
+    }
+    for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
+      RayHit hit;
+      const vec3 *c = &corners_[size_t(i) * 3];
+      if (intersect_ray_triangle(origin, direction, c[0], c[1], c[2], hit) && hit.t <= t_max) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 bool TriangleBVH::ray_farthest_hit(const vec3 &origin, const vec3 &direction,
                                    RayHit &r_hit) const
 {

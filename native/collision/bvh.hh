@@ -77,6 +77,8 @@ class TriangleBVH {
   /* Every hit with t in [0, t_max], sorted by t, appended to r_hits (cleared first). */
   void ray_hits(const vec3 &origin, const vec3 &direction, float t_max,
                 std::vector<RayHit> &r_hits) const;
+  /* Whether the ray hits anything with t in [0, t_max] (stops at the first hit found). */
+  bool ray_hits_any(const vec3 &origin, const vec3 &direction, float t_max) const;
   /* The hit with the largest t >= 0 (the outermost surface along a ray cast outwards).
    * False when the ray misses. */
   bool ray_farthest_hit(const vec3 &origin, const vec3 &direction, RayHit &r_hit) const;

@@ -302,7 +302,6 @@ void LodSolver::select(const LodCamera &camera)
                                  0.0f;
   /* §6.1: visibility first, then distance and velocity, per active hair group. */
   parallel_for(nodes, 64, [&](const IndexRange range) {
-    std::vector<RayHit> scratch;
     for (int64_t node = range.start; node < range.one_after_last(); node++) {
       if (!active_[size_t(node)]) {
         continue;
@@ -325,8 +324,7 @@ void LodSolver::select(const LodCamera &camera)
         visible = false;
         const float margin = hierarchy_.radius(node) + margin_scale;
         for (const int32_t k : {n / 4, n / 2, (3 * n) / 4, n - 1}) {
-          if (k > 0 && !hidden_by_colliders(*colliders_, camera.position_wo(), points[k], margin,
-                                            scratch))
+          if (k > 0 && !hidden_by_colliders(*colliders_, camera.position_wo(), points[k], margin))
           {
             visible = true;
             break;

@@ -63,7 +63,7 @@ int32_t wanted_level(const float distance, const float speed, const LodParams &p
 }
 
 bool hidden_by_colliders(const ColliderSet &colliders, const vec3 &eye_wo, const vec3 &point_wo,
-                         const float margin_wo, std::vector<RayHit> &r_scratch)
+                         const float margin_wo)
 {
   const float distance = glm::length(point_wo - eye_wo);
   if (distance <= margin_wo) {
@@ -79,8 +79,7 @@ bool hidden_by_colliders(const ColliderSet &colliders, const vec3 &eye_wo, const
     const mat4 world_to_object = glm::inverse(collider.object_to_world());
     const vec3 origin = transform_point(world_to_object, eye_wo);
     const vec3 target = transform_point(world_to_object, point_wo);
-    bvh.ray_hits(origin, target - origin, t_max, r_scratch);
-    if (!r_scratch.empty()) {
+    if (bvh.ray_hits_any(origin, target - origin, t_max)) {
       return true;
     }
   }

@@ -42,8 +42,8 @@ int32_t wanted_level(float distance, float speed, const LodParams &params, int32
                      int32_t finest);
 
 /* True when the segment from the eye to `point_wo`, stopped `margin_wo` short of it, crosses a
- * collider's triangles (§6.1: "occluded by the body"). r_scratch is reused between calls. */
+ * collider's triangles (§6.1: "occluded by the body"). */
 bool hidden_by_colliders(const ColliderSet &colliders, const vec3 &eye_wo, const vec3 &point_wo,
-                         float margin_wo, std::vector<RayHit> &r_scratch);
+                         float margin_wo);
 
 }  // namespace hairdyn
