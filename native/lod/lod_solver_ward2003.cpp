@@ -54,6 +54,8 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
   const int64_t points = hierarchy_.rest_positions().size();
   positions_wo_.resize(size_t(points));
   residuals_wo_.assign(size_t(points), vec3(0.0f));
+  offsets_.resize(size_t(points));
+  offset_nodes_.assign(size_t(hierarchy_.strands_num()), -1);
   rest_lengths_.assign(size_t(points), 0.0f);
   const Span<vec3> rest = hierarchy_.rest_positions();
   for (int64_t strand = 0; strand < hierarchy_.strands_num(); strand++) {
@@ -464,7 +466,12 @@ void LodSolver::place_strands(const float frame_dt)
           }
         }
         else {
-          skin_strand(hierarchy_, node, strand, skeleton(node), frames(node), out);
+          const MutableSpan<vec3> offsets(offsets_.data() + points.start, points.size);
+          if (offset_nodes_[size_t(strand)] != node) {
+            strand_offsets(hierarchy_, node, strand, offsets);
+            offset_nodes_[size_t(strand)] = node;
+          }
+          skin_strand(hierarchy_, strand, offsets, skeleton(node), frames(node), out);
           for (int64_t i = 0; i < points.size; i++) {
             residual[i] *= decay;
             out[i] += residual[i];

@@ -177,6 +177,10 @@ class LodSolver {
   /* Per point. */
   std::vector<vec3> positions_wo_;
   std::vector<vec3> residuals_wo_;
+  /* Per point, its strand's strand_offsets on the node offset_nodes_ names (per strand; −1:
+   * none yet). */
+  std::vector<vec3> offsets_;
+  std::vector<int32_t> offset_nodes_;
   std::vector<float> rest_lengths_; /* m, from the previous point at rest (0 at roots) */
   std::vector<int32_t> point_levels_;
 

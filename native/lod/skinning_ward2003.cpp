@@ -14,25 +14,64 @@ void current_skeleton_frames(const Span<vec3> skeleton_wo, const Span<mat3> rest
   skeleton_frames(skeleton_wo, head_rotation * rest_frames[0], r_frames);
 }
 
+namespace {
+
+/* Strand point i's skeleton segment a (between control points a and a + 1, at weight w) and
+ * the frame f it is offset in: the segment's (it ends at a + 1), the root in the root frame. */
+struct PointOnSkeleton {
+  int32_t a, f;
+  float w;
+};
+PointOnSkeleton point_on_skeleton(const LodHierarchy &hierarchy, const int64_t first,
+                                  const int64_t i)
+{
+  const int32_t a = hierarchy.point_segments()[i];
+  return {a, i == first ? 0 : a + 1, hierarchy.point_weights()[i]};
+}
+
+/* Point i's rest offset from the node's skeleton, in the skeleton's rest frame f. */
+vec3 rest_offset(const LodHierarchy &hierarchy, const int64_t node, const int64_t i,
+                 const PointOnSkeleton &p)
+{
+  const Span<vec3> rest_skeleton = hierarchy.rest_skeleton(node);
+  const vec3 offset_rest = hierarchy.rest_positions()[i] -
+                           glm::mix(rest_skeleton[p.a], rest_skeleton[p.a + 1], p.w);
+  return glm::transpose(hierarchy.rest_frames(node)[p.f]) * offset_rest;
+}
+
+}  // namespace
+
 void skin_strand(const LodHierarchy &hierarchy, const int64_t node, const int64_t strand,
                  const Span<vec3> skeleton_wo, const Span<mat3> frames,
                  const MutableSpan<vec3> r_positions_wo)
 {
-  const Span<vec3> rest_skeleton = hierarchy.rest_skeleton(node);
-  const Span<mat3> rest_frames = hierarchy.rest_frames(node);
-  const Span<vec3> rest = hierarchy.rest_positions();
-  const Span<int32_t> segments = hierarchy.point_segments();
-  const Span<float> weights = hierarchy.point_weights();
   const IndexRange points = curve_points(hierarchy.curve_offsets(), strand);
   for (int64_t i = points.start; i < points.one_after_last(); i++) {
-    const int32_t a = segments[i];
-    const float w = weights[i];
-    /* The frame of the segment a → a + 1 (it ends at a + 1); the root in the root frame. */
-    const int32_t f = i == points.start ? 0 : a + 1;
-    const vec3 offset_rest = rest[i] - glm::mix(rest_skeleton[a], rest_skeleton[a + 1], w);
-    const vec3 offset_local = glm::transpose(rest_frames[f]) * offset_rest;
-    r_positions_wo[i - points.start] =
-        glm::mix(skeleton_wo[a], skeleton_wo[a + 1], w) + frames[f] * offset_local;
+    const PointOnSkeleton p = point_on_skeleton(hierarchy, points.start, i);
+    r_positions_wo[i - points.start] = glm::mix(skeleton_wo[p.a], skeleton_wo[p.a + 1], p.w) +
+                                       frames[p.f] * rest_offset(hierarchy, node, i, p);
+  }
+}
+
+void strand_offsets(const LodHierarchy &hierarchy, const int64_t node, const int64_t strand,
+                    const MutableSpan<vec3> r_offsets)
+{
+  const IndexRange points = curve_points(hierarchy.curve_offsets(), strand);
+  for (int64_t i = points.start; i < points.one_after_last(); i++) {
+    r_offsets[i - points.start] =
+        rest_offset(hierarchy, node, i, point_on_skeleton(hierarchy, points.start, i));
+  }
+}
+
+void skin_strand(const LodHierarchy &hierarchy, const int64_t strand, const Span<vec3> offsets,
+                 const Span<vec3> skeleton_wo, const Span<mat3> frames,
+                 const MutableSpan<vec3> r_positions_wo)
+{
+  const IndexRange points = curve_points(hierarchy.curve_offsets(), strand);
+  for (int64_t i = points.start; i < points.one_after_last(); i++) {
+    const PointOnSkeleton p = point_on_skeleton(hierarchy, points.start, i);
+    r_positions_wo[i - points.start] = glm::mix(skeleton_wo[p.a], skeleton_wo[p.a + 1], p.w) +
+                                       frames[p.f] * offsets[i - points.start];
   }
 }
 

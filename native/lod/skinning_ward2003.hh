@@ -24,6 +24,13 @@ void current_skeleton_frames(Span<vec3> skeleton_wo, Span<mat3> rest_frames,
  * holds the strand's points only. */
 void skin_strand(const LodHierarchy &hierarchy, int64_t node, int64_t strand,
                  Span<vec3> skeleton_wo, Span<mat3> frames, MutableSpan<vec3> r_positions_wo);
+/* The offsets skin_strand places strand `strand`'s points by on node `node` (each in its
+ * skeleton frame), to place it again and again without computing them (the same result). */
+void strand_offsets(const LodHierarchy &hierarchy, int64_t node, int64_t strand,
+                    MutableSpan<vec3> r_offsets);
+/* skin_strand by the strand's strand_offsets on the node they were computed for. */
+void skin_strand(const LodHierarchy &hierarchy, int64_t strand, Span<vec3> offsets,
+                 Span<vec3> skeleton_wo, Span<mat3> frames, MutableSpan<vec3> r_positions_wo);
 
 /* Gives each segment of a placed strand its rest length, root to tip, keeping its direction
  * (follow the leader: Müller, Kim & Chentanez 2012, "Fast simulation of inextensible hair and
