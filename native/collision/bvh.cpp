@@ -198,50 +198,15 @@ TriangleBVH::TriangleBVH(const Span<vec3> vertices, const Span<ivec3> triangles,
   }
 }
 
-void TriangleBVH::ray_hits(const vec3 &origin, const vec3 &direction, const float t_max,
-                           std::vector<RayHit> &r_hits) const
-{
-  r_hits.clear();
-  if (nodes_.empty()) {
-    return;
-  }
-  const vec3 inv_dir = safe_inverse(direction);
-  std::vector<int32_t> stack{0};
-  while (!stack.empty()) {
-    const Node &node = nodes_[size_t(stack.back())];
-    const int32_t node_index = stack.back();
-    stack.pop_back();
-    float t_near, t_far;
-    if (!ray_box(origin, inv_dir, node.min, node.max, t_max, t_near, t_far)) {
-      continue;
-    }
-    if (node.count == 0) {
-      stack.push_back(node.first_or_right);
-      stack.push_back(node_index + 1);
-      continue;
-    }
-    for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
-      RayHit hit;
-      const vec3 *c = &corners_[size_t(i) * 3];
-      if (intersect_ray_triangle(origin, direction, c[0], c[1], c[2], hit) && hit.t <= t_max) {
-        hit.triangle = triangle_ids_[size_t(i)];
-        r_hits.push_back(hit);
-      }
-    }
-  }
-  std::sort(r_hits.begin(), r_hits.end(), [](const RayHit &a, const RayHit &b) {
-    return a.t < b.t || (a.t == b.t && a.triangle < b.triangle);
-  });
-}
-
-bool TriangleBVH::ray_hits_any(const vec3 &origin, const vec3 &direction,
-                               const float t_max) const
+template<typename Fn>
+bool TriangleBVH::for_each_ray_hit(const vec3 &origin, const vec3 &direction, const float t_max,
+                                   const Fn &fn) const
 {
   if (nodes_.empty()) {
     return false;
   }
   const vec3 inv_dir = safe_inverse(direction);
-  /* Median splits: the depth is log2 of the triangles, far below the stack's size. */
+  /* At most 64 pending nodes, as in closest_point. */
   int32_t stack[64];
   int stack_size = 0;
   stack[stack_size++] = 0;
@@ -261,11 +226,33 @@ bool TriangleBVH::ray_hits_any(const vec3 &origin, const vec3 &direction,
       RayHit hit;
       const vec3 *c = &corners_[size_t(i) * 3];
       if (intersect_ray_triangle(origin, direction, c[0], c[1], c[2], hit) && hit.t <= t_max) {
-        return true;
+        hit.triangle = triangle_ids_[size_t(i)];
+        if (fn(hit)) {
+          return true;
+        }
       }
     }
   }
   return false;
+}
+
+void TriangleBVH::ray_hits(const vec3 &origin, const vec3 &direction, const float t_max,
+                           std::vector<RayHit> &r_hits) const
+{
+  r_hits.clear();
+  for_each_ray_hit(origin, direction, t_max, [&](const RayHit &hit) {
+    r_hits.push_back(hit);
+    return false;
+  });
+  std::sort(r_hits.begin(), r_hits.end(), [](const RayHit &a, const RayHit &b) {
+    return a.t < b.t || (a.t == b.t && a.triangle < b.triangle);
+  });
+}
+
+bool TriangleBVH::ray_hits_any(const vec3 &origin, const vec3 &direction,
+                               const float t_max) const
+{
+  return for_each_ray_hit(origin, direction, t_max, [](const RayHit & /*hit*/) { return true; });
 }
 
 bool TriangleBVH::ray_farthest_hit(const vec3 &origin, const vec3 &direction,

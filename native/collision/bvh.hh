@@ -88,6 +88,12 @@ class TriangleBVH {
   ClosestPoint closest_point(const vec3 &p, float max_distance_sq) const;
 
  private:
+  /* fn(hit) for the ray's hits with t in [0, t_max], in the tree's order, until it returns
+   * true (then true). */
+  template<typename Fn>
+  bool for_each_ray_hit(const vec3 &origin, const vec3 &direction, float t_max,
+                        const Fn &fn) const;
+
   struct Node {
     vec3 min, max;
     /* Leaf: first triangle and count (count > 0). Inner: right child index, count == 0; the

@@ -466,12 +466,12 @@ void LodSolver::place_strands(const float frame_dt)
           }
         }
         else {
-          const MutableSpan<vec3> offsets(offsets_.data() + points.start, points.size);
+          const MutableSpan<vec3> on_node(offsets_.data() + points.start, points.size);
           if (offset_nodes_[size_t(strand)] != node) {
-            strand_offsets(hierarchy_, node, strand, offsets);
+            strand_offsets(hierarchy_, node, strand, on_node);
             offset_nodes_[size_t(strand)] = node;
           }
-          skin_strand(hierarchy_, strand, offsets, skeleton(node), frames(node), out);
+          skin_strand(hierarchy_, strand, on_node, skeleton(node), frames(node), out);
           for (int64_t i = 0; i < points.size; i++) {
             residual[i] *= decay;
             out[i] += residual[i];

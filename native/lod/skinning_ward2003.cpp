@@ -39,18 +39,31 @@ vec3 rest_offset(const LodHierarchy &hierarchy, const int64_t node, const int64_
   return glm::transpose(hierarchy.rest_frames(node)[p.f]) * offset_rest;
 }
 
+/* Strand `strand`'s points on the skeleton and frames, each by offset_of(i, p), its offset in
+ * frame p.f. */
+template<typename OffsetOf>
+void place_points(const LodHierarchy &hierarchy, const int64_t strand, const Span<vec3> skeleton_wo,
+                  const Span<mat3> frames, const MutableSpan<vec3> r_positions_wo,
+                  const OffsetOf &offset_of)
+{
+  const IndexRange points = curve_points(hierarchy.curve_offsets(), strand);
+  for (int64_t i = points.start; i < points.one_after_last(); i++) {
+    const PointOnSkeleton p = point_on_skeleton(hierarchy, points.start, i);
+    r_positions_wo[i - points.start] = glm::mix(skeleton_wo[p.a], skeleton_wo[p.a + 1], p.w) +
+                                       frames[p.f] * offset_of(i, p);
+  }
+}
+
 }  // namespace
 
 void skin_strand(const LodHierarchy &hierarchy, const int64_t node, const int64_t strand,
                  const Span<vec3> skeleton_wo, const Span<mat3> frames,
                  const MutableSpan<vec3> r_positions_wo)
 {
-  const IndexRange points = curve_points(hierarchy.curve_offsets(), strand);
-  for (int64_t i = points.start; i < points.one_after_last(); i++) {
-    const PointOnSkeleton p = point_on_skeleton(hierarchy, points.start, i);
-    r_positions_wo[i - points.start] = glm::mix(skeleton_wo[p.a], skeleton_wo[p.a + 1], p.w) +
-                                       frames[p.f] * rest_offset(hierarchy, node, i, p);
-  }
+  place_points(hierarchy, strand, skeleton_wo, frames, r_positions_wo,
+               [&](const int64_t i, const PointOnSkeleton &p) {
+                 return rest_offset(hierarchy, node, i, p);
+               });
 }
 
 void strand_offsets(const LodHierarchy &hierarchy, const int64_t node, const int64_t strand,
@@ -67,12 +80,9 @@ void skin_strand(const LodHierarchy &hierarchy, const int64_t strand, const Span
                  const Span<vec3> skeleton_wo, const Span<mat3> frames,
                  const MutableSpan<vec3> r_positions_wo)
 {
-  const IndexRange points = curve_points(hierarchy.curve_offsets(), strand);
-  for (int64_t i = points.start; i < points.one_after_last(); i++) {
-    const PointOnSkeleton p = point_on_skeleton(hierarchy, points.start, i);
-    r_positions_wo[i - points.start] = glm::mix(skeleton_wo[p.a], skeleton_wo[p.a + 1], p.w) +
-                                       frames[p.f] * offsets[i - points.start];
-  }
+  const int64_t first = curve_points(hierarchy.curve_offsets(), strand).start;
+  place_points(hierarchy, strand, skeleton_wo, frames, r_positions_wo,
+               [&](const int64_t i, const PointOnSkeleton & /*p*/) { return offsets[i - first]; });
 }
 
 void keep_segment_lengths(const Span<float> rest_lengths, const MutableSpan<vec3> r_positions_wo)
