@@ -206,20 +206,16 @@ bool TriangleBVH::for_each_ray_hit(const vec3 &origin, const vec3 &direction, co
     return false;
   }
   const vec3 inv_dir = safe_inverse(direction);
-  /* At most 64 pending nodes, as in closest_point. */
-  int32_t stack[64];
-  int stack_size = 0;
-  stack[stack_size++] = 0;
-  while (stack_size > 0) {
-    const int32_t node_index = stack[--stack_size];
+  PendingNodes pending;
+  while (!pending.empty()) {
+    const int32_t node_index = pending.pop();
     const Node &node = nodes_[size_t(node_index)];
     float t_near, t_far;
     if (!ray_box(origin, inv_dir, node.min, node.max, t_max, t_near, t_far)) {
       continue;
     }
     if (node.count == 0) {
-      stack[stack_size++] = node.first_or_right;
-      stack[stack_size++] = node_index + 1;
+      pending.push(node.first_or_right, node_index + 1);
       continue;
     }
     for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
@@ -264,10 +260,9 @@ bool TriangleBVH::ray_farthest_hit(const vec3 &origin, const vec3 &direction,
   const vec3 inv_dir = safe_inverse(direction);
   bool found = false;
   float best_t = -1.0f;
-  std::vector<int32_t> stack{0};
-  while (!stack.empty()) {
-    const int32_t node_index = stack.back();
-    stack.pop_back();
+  PendingNodes pending;
+  while (!pending.empty()) {
+    const int32_t node_index = pending.pop();
     const Node &node = nodes_[size_t(node_index)];
     float t_near, t_far;
     if (!ray_box(origin, inv_dir, node.min, node.max, float_max, t_near, t_far) ||
@@ -276,8 +271,7 @@ bool TriangleBVH::ray_farthest_hit(const vec3 &origin, const vec3 &direction,
       continue;
     }
     if (node.count == 0) {
-      stack.push_back(node_index + 1);
-      stack.push_back(node.first_or_right);
+      pending.push(node_index + 1, node.first_or_right);
       continue;
     }
     for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
@@ -309,14 +303,9 @@ ClosestPoint TriangleBVH::closest_point(const vec3 &p, const float max_distance_
   if (nodes_.empty()) {
     return best;
   }
-  /* A median-split tree of at most 2^31 triangles is at most 32 levels deep, and a depth-first
-   * walk keeps at most one pending sibling per level: 64 entries always suffice (no
-   * allocation per query, which cost as much as the walk on small meshes). */
-  int32_t stack[64];
-  int stack_size = 0;
-  stack[stack_size++] = 0;
-  while (stack_size > 0) {
-    const int32_t node_index = stack[--stack_size];
+  PendingNodes pending;
+  while (!pending.empty()) {
+    const int32_t node_index = pending.pop();
     const Node &node = nodes_[size_t(node_index)];
     if (box_distance_sq(p, node.min, node.max) >= best.distance_sq) {
       continue;
@@ -328,12 +317,10 @@ ClosestPoint TriangleBVH::closest_point(const vec3 &p, const float max_distance_
       const float d_right = box_distance_sq(p, right.min, right.max);
       /* Nearer child on top of the stack, visited first. */
       if (d_left < d_right) {
-        stack[stack_size++] = node.first_or_right;
-        stack[stack_size++] = node_index + 1;
+        pending.push(node.first_or_right, node_index + 1);
       }
       else {
-        stack[stack_size++] = node_index + 1;
-        stack[stack_size++] = node.first_or_right;
+        pending.push(node_index + 1, node.first_or_right);
       }
       continue;
     }

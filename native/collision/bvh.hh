@@ -55,6 +55,24 @@ struct SplitNode {
   bool is_leaf() const { return right == 0; }
 };
 
+/* The nodes a depth-first walk of a median_split_tree has still to visit, starting at the root.
+ * A tree of at most 2^31 triangles is at most 32 levels deep and the walk keeps at most one
+ * pending sibling per level: 64 entries always suffice (no allocation per query, which cost as
+ * much as the walk on small meshes). */
+struct PendingNodes {
+  int32_t nodes[64];
+  int size = 1;
+  PendingNodes() { nodes[0] = 0; }
+  bool empty() const { return size == 0; }
+  int32_t pop() { return nodes[--size]; }
+  /* Visited next: `second`, then `first`. */
+  void push(const int32_t first, const int32_t second)
+  {
+    nodes[size++] = first;
+    nodes[size++] = second;
+  }
+};
+
 /* Binary tree over the triangles, nodes stored depth-first: each node is split at the median
  * centroid along its centroids' longest axis (ties by triangle index, so the tree does not
  * depend on the sort), at most `leaf_size` triangles per leaf. r_order receives the triangle

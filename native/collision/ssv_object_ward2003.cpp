@@ -66,11 +66,9 @@ void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_dist
   /* The SSV of the query against each node's PSS (§5.4: "recursively traversing the BVH
    * testing the hair's SSV against the bounding volumes"); a rectangle lies within its half
    * width of its segment. */
-  int32_t stack[64];
-  int stack_size = 0;
-  stack[stack_size++] = 0;
-  while (stack_size > 0) {
-    const int32_t node_index = stack[--stack_size];
+  PendingNodes pending;
+  while (!pending.empty()) {
+    const int32_t node_index = pending.pop();
     const Node &node = nodes_[size_t(node_index)];
     if (point_segment_distance(node.volume.center, a, b).distance - node.volume.radius -
             side_len >
@@ -79,9 +77,7 @@ void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_dist
       continue;
     }
     if (node.count == 0) {
-      /* Median splits: the depth is log2 of the triangles, far below the stack's size. */
-      stack[stack_size++] = node.first_or_right;
-      stack[stack_size++] = node_index + 1;
+      pending.push(node.first_or_right, node_index + 1);
       continue;
     }
     for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
