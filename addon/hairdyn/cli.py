@@ -165,6 +165,8 @@ def _resolve(settable, name):
 def apply_settings(settings, assignments):
     """Apply NAME=VALUE strings to a hairdyn settings PropertyGroup. NAME is a property name,
     qualified by its group where needed (strands.damping, collision.damping)."""
+    from hairdyn import native, parameters
+
     settable = _settable(settings)
     for assignment in assignments:
         name, sep, text = assignment.partition("=")
@@ -175,8 +177,6 @@ def apply_settings(settings, assignments):
         if prop.type == 'COLLECTION':
             _set_colliders(group, prop, text)
             continue
-        from hairdyn import native, parameters
-
         value = _parse_value(prop, text, parameters.shown_unit(group, prop.identifier,
                                                                native.load()))
         try:

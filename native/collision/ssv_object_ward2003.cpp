@@ -179,13 +179,16 @@ Push push_out_of_triangle(const SegmentCore &core, const float r, const SsvBVH &
   }
   for (int k = 0; k < 3 && corners_num > 0; k++) {
     const vec3 inward = glm::cross(n, t[(k + 1) % 3] - t[k]);
-    const auto side_of = [&](const Corner &c) {
-      return glm::dot(core.at(c.s, c.across) - t[k], inward);
-    };
+    std::array<float, 8> sides; /* each corner's, once */
+    for (int i = 0; i < corners_num; i++) {
+      const Corner &c = polygon[size_t(i)];
+      sides[size_t(i)] = glm::dot(core.at(c.s, c.across) - t[k], inward);
+    }
     int kept = 0;
     for (int i = 0; i < corners_num; i++) {
-      const Corner &p = polygon[size_t(i)], &q = polygon[size_t((i + 1) % corners_num)];
-      const float fp = side_of(p), fq = side_of(q);
+      const int j = (i + 1) % corners_num;
+      const Corner &p = polygon[size_t(i)], &q = polygon[size_t(j)];
+      const float fp = sides[size_t(i)], fq = sides[size_t(j)];
       if (fp >= 0.0f) {
         clipped[size_t(kept++)] = p;
       }

@@ -439,46 +439,41 @@ void LodSolver::place_strands(const float frame_dt)
   constexpr int64_t group = 4;
   const int64_t strands_num = hierarchy_.strands_num();
   parallel_for((strands_num + group - 1) / group, 32, [&](const IndexRange groups) {
-    for (int64_t first = groups.start * group;
-         first < std::min(strands_num, groups.one_after_last() * group); first += group)
-    {
+    for (int64_t g = groups.start; g < groups.one_after_last(); g++) {
+      const int64_t first = g * group;
       const int strands_in_group = int(std::min(group, strands_num - first));
       Span<float> rest_lengths[group];
       MutableSpan<vec3> placed[group];
-      for (int g = 0; g < strands_in_group; g++) {
-        const int64_t strand = first + g;
+      for (int k = 0; k < strands_in_group; k++) {
+        const int64_t strand = first + k;
         const IndexRange points = curve_points(offsets, strand);
         const MutableSpan<vec3> out(positions_wo_.data() + points.start, points.size);
         const MutableSpan<vec3> residual(residuals_wo_.data() + points.start, points.size);
         const int32_t node = strand_nodes_[size_t(strand)];
         const int32_t old_node = placed_nodes_[size_t(strand)];
-        if (old_node != node && tau > 0.0f) {
-          /* §6.3: the jump between the old and the new skeleton's placement is kept, and the
-           * spring pulls it to zero over the next frames. */
+        /* §6.3: on a switch the jump between the old and the new skeleton's placement is
+         * kept, and the spring pulls it to zero over the next frames. */
+        const bool switched = old_node != node && tau > 0.0f;
+        if (switched) {
           skin_strand(hierarchy_, old_node, strand, skeleton(old_node), frames(old_node), out);
-          for (int64_t i = 0; i < points.size; i++) {
-            residual[i] = decay * residual[i] + out[i];
-          }
-          skin_strand(hierarchy_, node, strand, skeleton(node), frames(node), out);
-          for (int64_t i = 0; i < points.size; i++) {
+        }
+        for (int64_t i = 0; i < points.size; i++) {
+          residual[i] = switched ? decay * residual[i] + out[i] : decay * residual[i];
+        }
+        const MutableSpan<vec3> on_node(offsets_.data() + points.start, points.size);
+        if (offset_nodes_[size_t(strand)] != node) {
+          strand_offsets(hierarchy_, node, strand, on_node);
+          offset_nodes_[size_t(strand)] = node;
+        }
+        skin_strand(hierarchy_, strand, on_node, skeleton(node), frames(node), out);
+        for (int64_t i = 0; i < points.size; i++) {
+          if (switched) {
             residual[i] -= out[i];
-            out[i] += residual[i];
           }
+          out[i] += residual[i];
         }
-        else {
-          const MutableSpan<vec3> on_node(offsets_.data() + points.start, points.size);
-          if (offset_nodes_[size_t(strand)] != node) {
-            strand_offsets(hierarchy_, node, strand, on_node);
-            offset_nodes_[size_t(strand)] = node;
-          }
-          skin_strand(hierarchy_, strand, on_node, skeleton(node), frames(node), out);
-          for (int64_t i = 0; i < points.size; i++) {
-            residual[i] *= decay;
-            out[i] += residual[i];
-          }
-        }
-        rest_lengths[g] = Span<float>(rest_lengths_).slice(points.start, points.size);
-        placed[g] = out;
+        rest_lengths[k] = Span<float>(rest_lengths_).slice(points.start, points.size);
+        placed[k] = out;
         for (int64_t i = 0; i < points.size; i++) {
           point_levels_[size_t(points.start + i)] = hierarchy_.depth(node);
         }
