@@ -132,8 +132,8 @@ TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
    * same bits as the scalar step before the lanes: BM_StrandStep's result_hash), whatever its
    * lane and its neighbours, through everything a step does: contacts with the
    * sphere and the projection's impulses, the predictor steps after them, steps cut short
-   * while the head shakes, and a last group that is not full; with the AVX2 code and with the
-   * baseline code. Here 7 strands of 16 segments and 4 of 8, interleaved, draped over the
+   * while the head shakes, and a last group that is not full; with each vector code the CPU
+   * runs (AVX-512, AVX2, baseline) against the widest's. Here 7 strands of 16 segments and 4 of 8, interleaved, draped over the
    * sphere while the head turns back and forth. */
   const test::TestMesh sphere = test::uv_sphere(radius, 48, 24);
   const ColliderMesh mesh(sphere.vertices, sphere.triangles);
@@ -194,9 +194,9 @@ TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
   const std::vector<std::vector<vec3>> expected = run(alone, contacts, projections);
   EXPECT_GT(contacts, 0);
   EXPECT_GT(projections, 0);
-  const bool avx2_was_used = articulated_avx2_used();
-  for (const bool avx2 : {true, false}) {
-    set_articulated_avx2(avx2);
+  const VectorCode used = articulated_vector_code();
+  for (const VectorCode code : {VectorCode::Avx512, VectorCode::Avx2, VectorCode::Baseline}) {
+    set_articulated_vector_code(code); /* the CPU's widest where it has not this one */
     const std::vector<std::vector<vec3>> frames = run({together}, contacts, projections);
     for (int frame = 0; frame < frames_num; frame++) {
       /* `together` lists positions then velocities of all; `alone` strand by strand. */
@@ -216,9 +216,9 @@ TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
       for (size_t i = 0; i < reordered.size(); i++) {
         ASSERT_EQ(frames[size_t(frame)][i], reordered[i])
             << "frame " << frame + 1 << ", " << (i < points ? "position" : "velocity") << " of point "
-            << i % points << (avx2 ? ", AVX2" : ", baseline");
+            << i % points << ", vector code " << int(articulated_vector_code());
       }
     }
   }
-  set_articulated_avx2(avx2_was_used);
+  set_articulated_vector_code(used);
 }

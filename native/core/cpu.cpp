@@ -12,4 +12,17 @@ bool cpu_has_avx2()
 #endif
 }
 
+VectorCode cpu_vector_code()
+{
+  if (!cpu_has_avx2()) {
+    return VectorCode::Baseline;
+  }
+#if defined(__GNUC__) && defined(__x86_64__)
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) {
+    return VectorCode::Avx512;
+  }
+#endif
+  return VectorCode::Avx2;
+}
+
 }  // namespace hairdyn

@@ -5,10 +5,10 @@
  * take either as their lane type R.
  *
  * Every operation is written as glm evaluates it on vec3, mat3, dvec3, dmat3, dvec2 and dmat2
- * (the same products, summed in the same order), each lane on its own, and none is fused: the
- * core builds as ISO C++, where GCC contracts no multiply-add. So a strand's step gives the
- * same bits in any lane of a vector as alone, whatever the instruction set the vector code
- * was compiled for (test StrandsCollision.LanesGiveEachStrandItsOwnBits). */
+ * (the same products, summed in the same order), each lane on its own, and none is fused
+ * (the core builds with -ffp-contract=off). So a strand's step gives the same bits in any
+ * lane of a vector as alone, whatever the instruction set the vector code was compiled for
+ * (test StrandsCollision.LanesGiveEachStrandItsOwnBits). */
 #include <cmath>
 
 #include "core/math.hh"

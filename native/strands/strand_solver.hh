@@ -40,6 +40,7 @@
 
 #include "collision/collider.hh"
 #include "collision/reaction_constraint_kurihara1993.hh"
+#include "core/cpu.hh"
 #include "core/head_motion.hh"
 #include "core/math.hh"
 #include "core/span.hh"
@@ -98,11 +99,11 @@ struct Substep {
   ForceField forces;
 };
 
-/* Whether the articulated model's vector recursion runs its AVX2 code: by default where the
- * CPU has it. Turning it off runs the baseline code, for the test that both give the same
- * bits; not to be changed while a step runs. */
-bool articulated_avx2_used();
-void set_articulated_avx2(bool enabled);
+/* The vector code the articulated model's recursion runs: by default the widest the CPU has.
+ * A narrower one may be set (a wider one is clamped to the CPU's), for the test that all give
+ * the same bits; not to be changed while a step runs. */
+VectorCode articulated_vector_code();
+void set_articulated_vector_code(VectorCode code);
 
 class StrandSolver {
  public:
