@@ -30,6 +30,9 @@ typedef float Floats __attribute__((vector_size(lane_width * sizeof(float))));
 constexpr size_t lane_alignment = sizeof(Lanes);
 
 #define HAIRDYN_CHAIN_INLINE [[gnu::always_inline]] inline
+/* The same for a lambda (after its parameters): inlined into each clone of its caller, it
+ * runs the clone's vector code (a lambda called apart would run the baseline's). */
+#define HAIRDYN_CHAIN_INLINE_LAMBDA __attribute__((always_inline))
 
 template<class R> struct V2 {
   R x, y;

@@ -259,43 +259,11 @@ template<class R> HAIRDYN_CHAIN_INLINE void root_to_tip(Link<R> *links, const si
   }
 }
 
-/* Passes 2 and 3 for lane_width strands at once, from pass 1's terms, compiled for each
- * vector code (each lane's bits are the same on every path, chain_lanes.hh): baseline, AVX2,
- * and AVX-512's 32 registers on the same 256-bit vectors (the recursion's 3×3 blocks of four
- * lanes spill from AVX2's 16: 1.1–1.2× faster on BM_StrandStep). */
 using Terms = StrandSolver::ArticulatedTerms;
-#define HAIRDYN_RECURSION_LANES(name, attributes) \
-  attributes void name(Link<Lanes> *links, const Terms *terms, const size_t n, const double *hd, \
-                       const bool implicit, const double damping) \
-  { \
-    tip_to_root(links, terms, n, hd, implicit, damping); \
-    root_to_tip(links, n); \
-  }
-HAIRDYN_RECURSION_LANES(recursion_lanes_baseline, )
-#if defined(__x86_64__)
-HAIRDYN_RECURSION_LANES(recursion_lanes_avx2, __attribute__((target("avx2"))))
-HAIRDYN_RECURSION_LANES(recursion_lanes_avx512,
-                        __attribute__((target("avx2,avx512f,avx512vl,prefer-vector-width=256"))))
-#endif
-#undef HAIRDYN_RECURSION_LANES
-std::atomic<VectorCode> vector_code{cpu_vector_code()};
 
-void recursion_lanes(Link<Lanes> *links, const Terms *terms, const size_t n, const double *hd,
-                     const bool implicit, const double damping)
-{
-  switch (vector_code.load(std::memory_order_relaxed)) {
-#if defined(__x86_64__)
-    case VectorCode::Avx512:
-      recursion_lanes_avx512(links, terms, n, hd, implicit, damping);
-      return;
-    case VectorCode::Avx2:
-      recursion_lanes_avx2(links, terms, n, hd, implicit, damping);
-      return;
-#endif
-    default:
-      recursion_lanes_baseline(links, terms, n, hd, implicit, damping);
-  }
-}
+/* Which vector code the step runs (core/cpu.hh): each has its clone of the whole substep
+ * (advance_articulated_as), every lane's bits the same on all (chain_lanes.hh). */
+std::atomic<VectorCode> vector_code{cpu_vector_code()};
 
 /* A step's scratch, per lane: pass 1's bodies and the mid-step rates' q̈; the recursion's
  * links; a strand's q̈ and its projected segments (body, outward normal); the nodes where a
@@ -384,9 +352,9 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
 
 }  // namespace
 
-void StrandSolver::advance_articulated(const Span<int64_t> curves, const Substep &substep,
-                                       const Span<mat3> root_frames, const Span<vec3> winds,
-                                       Counts &counts, const MutableSpan<uint8_t> r_finite)
+[[gnu::always_inline]] inline void StrandSolver::articulated_substep(
+    const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,
+    const Span<vec3> winds, Counts &counts, const MutableSpan<uint8_t> r_finite)
 {
   /* The velocity products are explicit: a segment that turns by more than about a radian in
    * one step (a pass's push of a few m/s on a 1 cm segment does) feeds its centripetal and
@@ -478,8 +446,8 @@ void StrandSolver::advance_articulated(const Span<int64_t> curves, const Substep
   }
 }
 
-void StrandSolver::mid_step_accelerations(const int64_t curve,
-                                          const MutableSpan<vec2> r_accelerations) const
+[[gnu::always_inline]] inline void StrandSolver::mid_step_accelerations(
+    const int64_t curve, const MutableSpan<vec2> r_accelerations) const
 {
   /* The mid-step rates' q̈ (see the top): the last two steps' extrapolated, or zero for a
    * predictor stage when they are not both known (a state was set, a pass's changes or
@@ -497,11 +465,11 @@ void StrandSolver::mid_step_accelerations(const int64_t curve,
  * uninitialised: a false positive of its vector element insertion. */
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Substep> steps,
-                                       const Span<mat3> root_frames, const Span<vec3> winds,
-                                       const Span<const vec2 *> mid_accelerations,
-                                       const Span<uint8_t> queried, ArticulatedTerms *terms,
-                                       float *r_fastest_turn, Counts *r_counts) const
+[[gnu::always_inline]] inline void StrandSolver::articulated_forward(
+    const Span<int64_t> curves, const Span<Substep> steps, const Span<mat3> root_frames,
+    const Span<vec3> winds, const Span<const vec2 *> mid_accelerations,
+    const Span<uint8_t> queried, ArticulatedTerms *terms, float *r_fastest_turn,
+    Counts *r_counts) const
 {
   /* Pass 1, root to tip (Table 7.1, first loop), lane_width strands at once: geometry,
    * relative velocities, the rates at the middle of the step and the external force F on
@@ -609,8 +577,9 @@ void StrandSolver::articulated_forward(const Span<int64_t> curves, const Span<Su
 }
 #pragma GCC diagnostic pop
 
-bool StrandSolver::articulated_commit(const int64_t curve, const Substep &substep,
-                                      const mat3 &root_frame, const Span<vec2> step_accelerations)
+[[gnu::always_inline]] inline bool StrandSolver::articulated_commit(
+    const int64_t curve, const Substep &substep, const mat3 &root_frame,
+    const Span<vec2> step_accelerations)
 {
   const IndexRange points = curve_points(curve_offsets_, curve);
   const float h = substep.h;
@@ -680,10 +649,10 @@ bool StrandSolver::articulated_commit(const int64_t curve, const Substep &subste
   return true;
 }
 
-void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Substep> steps,
-                                    const Span<uint8_t> may_split, const Span<mat3> root_frames,
-                                    const Span<vec3> winds, Counts &counts,
-                                    const MutableSpan<int> r_outcomes)
+[[gnu::always_inline]] inline void StrandSolver::articulated_step(
+    const Span<int64_t> curves, const Span<Substep> steps, const Span<uint8_t> may_split,
+    const Span<mat3> root_frames, const Span<vec3> winds, Counts &counts,
+    const MutableSpan<int> r_outcomes)
 {
   static_assert(lane_width == chain_lanes);
   assert(curves.size() >= 1 && curves.size() <= lane_width);
@@ -717,7 +686,8 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
   }
   /* The number of steps that keep a strand's turns within max_turn_per_step, if it may cut
    * its step and must. */
-  const auto steps_needed = [&](const int lane, const float fastest_turn) {
+  const auto steps_needed = [&](const int lane,
+                                const float fastest_turn) HAIRDYN_CHAIN_INLINE_LAMBDA {
     const float turn = steps[lane].h * fastest_turn;
     return may_split[lane] && turn > max_turn_per_step ?
                std::min(int(std::ceil(turn / max_turn_per_step)), max_turn_steps) :
@@ -728,7 +698,7 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
   const bool implicit = params_.integrator == Integrator::Implicit;
   float fastest_turn[lane_width];
   Counts lane_counts[lane_width];
-  const auto stage = [&](const uint8_t *queried) {
+  const auto stage = [&](const uint8_t *queried) HAIRDYN_CHAIN_INLINE_LAMBDA {
     double hd[lane_width];
     for (int lane = 0; lane < lane_width; lane++) {
       hd[lane] = double(lane_steps[lane].h);
@@ -740,8 +710,10 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
                         Span<const vec2 *>(mids, lane_width),
                         Span<uint8_t>(queried, lane_width), lane_terms.data(), fastest_turn,
                         lane_counts);
-    recursion_lanes(lane_links.data(), lane_terms.data(), n, hd, implicit,
-                    double(params_.bending_damping));
+    /* Passes 2 and 3 for all lanes. */
+    tip_to_root(lane_links.data(), lane_terms.data(), n, hd, implicit,
+                double(params_.bending_damping));
+    root_to_tip(lane_links.data(), n);
   };
   /* Stage 0, for the strands whose trend is not known: the predictor's q̈ at the step's start
    * rates (the fastest turn, and so a cut step, judged on them); stage 1 takes the step from
@@ -793,6 +765,55 @@ void StrandSolver::articulated_step(const Span<int64_t> curves, const Span<Subst
       stop_at_contact(lane_links.data(), lane_terms.data(), lane, n, body, real(normal),
                       MutableSpan<vec2>(angular_velocities_).slice(int64_t(first), int64_t(n)));
     }
+  }
+}
+
+/* Each vector code's clone of the substep. AVX-512 runs on the same 256-bit vectors as AVX2
+ * but has 32 registers, where the recursion's 3×3 blocks of four lanes spill from AVX2's 16
+ * (1.2× faster on BM_StrandStep than AVX2, the same bits). */
+template<>
+void StrandSolver::advance_articulated_as<VectorCode::Baseline>(
+    const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,
+    const Span<vec3> winds, Counts &counts, const MutableSpan<uint8_t> r_finite)
+{
+  articulated_substep(curves, substep, root_frames, winds, counts, r_finite);
+}
+#if defined(__x86_64__)
+template<>
+__attribute__((target("avx2"))) void StrandSolver::advance_articulated_as<VectorCode::Avx2>(
+    const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,
+    const Span<vec3> winds, Counts &counts, const MutableSpan<uint8_t> r_finite)
+{
+  articulated_substep(curves, substep, root_frames, winds, counts, r_finite);
+}
+template<>
+__attribute__((target("avx2,avx512f,avx512vl,prefer-vector-width=256"))) void
+StrandSolver::advance_articulated_as<VectorCode::Avx512>(
+    const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,
+    const Span<vec3> winds, Counts &counts, const MutableSpan<uint8_t> r_finite)
+{
+  articulated_substep(curves, substep, root_frames, winds, counts, r_finite);
+}
+#endif
+
+void StrandSolver::advance_articulated(const Span<int64_t> curves, const Substep &substep,
+                                       const Span<mat3> root_frames, const Span<vec3> winds,
+                                       Counts &counts, const MutableSpan<uint8_t> r_finite)
+{
+  switch (vector_code.load(std::memory_order_relaxed)) {
+#if defined(__x86_64__)
+    case VectorCode::Avx512:
+      advance_articulated_as<VectorCode::Avx512>(curves, substep, root_frames, winds, counts,
+                                                 r_finite);
+      return;
+    case VectorCode::Avx2:
+      advance_articulated_as<VectorCode::Avx2>(curves, substep, root_frames, winds, counts,
+                                               r_finite);
+      return;
+#endif
+    default:
+      advance_articulated_as<VectorCode::Baseline>(curves, substep, root_frames, winds, counts,
+                                                   r_finite);
   }
 }
 

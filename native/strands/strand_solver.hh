@@ -284,6 +284,14 @@ class StrandSolver {
    * k ran away (the caller puts it at rest). */
   void advance_articulated(Span<int64_t> curves, const Substep &substep, Span<mat3> root_frames,
                            Span<vec3> winds, Counts &counts, MutableSpan<uint8_t> r_finite);
+  /* advance_articulated compiled for one vector code (articulated_vector_code()), the whole
+   * substep inlined into it: articulated_substep, then articulated_step and its passes. */
+  template<VectorCode code>
+  void advance_articulated_as(Span<int64_t> curves, const Substep &substep,
+                              Span<mat3> root_frames, Span<vec3> winds, Counts &counts,
+                              MutableSpan<uint8_t> r_finite);
+  void articulated_substep(Span<int64_t> curves, const Substep &substep, Span<mat3> root_frames,
+                           Span<vec3> winds, Counts &counts, MutableSpan<uint8_t> r_finite);
   /* One step of steps[k].h for each of `curves` (one point count, up to chain_lanes).
    * r_outcomes[k]: 1 when strand k took it; -1 when it ran away; n > 1 when it may cut its
    * step (may_split[k]) and turns more than max_turn_per_step within it: then it is left
