@@ -402,14 +402,14 @@ void StrandSolver::prepare_strand(const int64_t curve, const float h)
       hinge_stiffness_[size_t(i)] = float(params_.bending_stiffness_at(s, length) / voronoi);
       s += d;
     }
+    return;
   }
+  /* Kurihara 1993's hinges: the integrator's coefficients for this frame's h. (The sines and
+   * cosines of the angles, trig_, are kept with the angles by everything that sets them.) */
   const vec2 k(params_.k_theta, params_.k_phi);
   for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
     hinge_steps_[size_t(i)] = hinge_step(params_.integrator, moment_of_inertia(i), k,
                                          params_.damping, h);
-    /* Each segment's deflection at the end of a substep is its deflection at the start of the
-     * next: its sines and cosines are computed once per substep, not twice. */
-    trig_[size_t(i)] = Deflection(angles_[size_t(i)]).trig();
   }
 }
 
