@@ -266,14 +266,12 @@ using Terms = StrandSolver::ArticulatedTerms;
 std::atomic<VectorCode> vector_code{cpu_vector_code()};
 
 /* A step's scratch, per lane: pass 1's bodies and the mid-step rates' q̈; the recursion's
- * links; a strand's q̈ and its projected segments (body, outward normal); the nodes where a
- * cut substep began. */
+ * links; a strand's q̈ and its projected segments (body, outward normal). */
 thread_local std::vector<vec2> lane_mid_accelerations[lane_width];
 thread_local std::vector<Link<Lanes>> lane_links;
 thread_local std::vector<Terms> lane_terms;
 thread_local std::vector<vec2> accelerations;
 thread_local std::vector<std::pair<size_t, vec3>> stops;
-thread_local std::vector<vec3> substep_start[lane_width];
 
 
 inline rvec3 real(const vec3 &v)
@@ -363,13 +361,13 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
    * down to substep.h / max_turn_steps; the head's pose and forces stay the substep's (the
    * root is already placed). A strand that turns slowly takes the substep in one step. Each
    * strand cuts its own steps; the strands still stepping step together. */
-  assert(curves.size() <= chain_lanes);
+  assert(curves.size() <= group_strands_max);
   const int64_t lanes_num = curves.size();
   const float shortest = substep.h / float(max_turn_steps);
-  Substep steps[chain_lanes];
-  float remaining[chain_lanes];
-  bool split_any[chain_lanes];
-  int64_t active[chain_lanes]; /* the lanes still stepping */
+  Substep steps[group_strands_max];
+  float remaining[group_strands_max];
+  bool split_any[group_strands_max];
+  int64_t active[group_strands_max]; /* the strands still stepping */
   for (int64_t k = 0; k < lanes_num; k++) {
     steps[k] = substep;
     remaining[k] = substep.h;
@@ -378,13 +376,17 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
     active[k] = k;
   }
   int64_t active_num = lanes_num;
+  /* Per strand, the nodes where its substep began, if it cut it into steps. */
+  thread_local std::vector<vec3> substep_start[group_strands_max];
   while (active_num > 0) {
-    int64_t step_curves[chain_lanes];
-    Substep step_of[chain_lanes];
-    uint8_t may_split[chain_lanes];
-    mat3 frames[chain_lanes];
-    vec3 step_winds[chain_lanes];
-    float h[chain_lanes];
+    /* One step of every strand still stepping, chain_lanes at a time: those that cut their
+     * steps fill the vectors together, whichever strands they stepped beside at first. */
+    int64_t step_curves[group_strands_max];
+    Substep step_of[group_strands_max];
+    uint8_t may_split[group_strands_max];
+    mat3 frames[group_strands_max];
+    vec3 step_winds[group_strands_max];
+    float h[group_strands_max];
     for (int64_t j = 0; j < active_num; j++) {
       const int64_t k = active[j];
       /* The last step takes what remains (rounding leaves no sliver of a step). */
@@ -399,11 +401,14 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
       frames[j] = root_frames[k];
       step_winds[j] = winds[k];
     }
-    int outcomes[chain_lanes];
-    articulated_step(Span<int64_t>(step_curves, active_num), Span<Substep>(step_of, active_num),
-                     Span<uint8_t>(may_split, active_num), Span<mat3>(frames, active_num),
-                     Span<vec3>(step_winds, active_num), counts,
-                     MutableSpan<int>(outcomes, active_num));
+    int outcomes[group_strands_max];
+    for (int64_t first = 0; first < active_num; first += chain_lanes) {
+      const int64_t num = std::min<int64_t>(chain_lanes, active_num - first);
+      articulated_step(Span<int64_t>(step_curves + first, num), Span<Substep>(step_of + first, num),
+                       Span<uint8_t>(may_split + first, num), Span<mat3>(frames + first, num),
+                       Span<vec3>(step_winds + first, num), counts,
+                       MutableSpan<int>(outcomes + first, num));
+    }
     int64_t kept = 0;
     for (int64_t j = 0; j < active_num; j++) {
       const int64_t k = active[j];

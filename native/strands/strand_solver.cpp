@@ -289,7 +289,7 @@ void StrandSolver::group_strands()
     const int64_t curve = masked ? stepped_curves_[size_t(index)] : index;
     const int32_t points_num = curve_offsets_[size_t(curve + 1)] - curve_offsets_[size_t(curve)];
     auto [slot, fresh] = open.try_emplace(points_num, groups_.size());
-    if (fresh || groups_[slot->second].size == chain_lanes) {
+    if (fresh || groups_[slot->second].size == group_strands_max) {
       slot->second = groups_.size();
       groups_.emplace_back();
     }
@@ -487,8 +487,8 @@ vec3 StrandSolver::place_root(const int64_t curve, const Substep &substep, mat3 
 void StrandSolver::advance_strands(const Span<int64_t> curves, const Substep &substep,
                                    Counts &counts, const MutableSpan<uint8_t> r_finite)
 {
-  mat3 frames[chain_lanes];
-  vec3 winds[chain_lanes];
+  mat3 frames[group_strands_max];
+  vec3 winds[group_strands_max];
   for (int64_t k = 0; k < curves.size(); k++) {
     winds[k] = place_root(curves[k], substep, frames[k]);
   }
@@ -671,7 +671,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
   const bool masked = !stepped_.empty();
   const int64_t stepped_num = masked ? int64_t(stepped_curves_.size()) : curves_num();
   const int64_t groups_num = int64_t(groups_.size());
-  const int64_t group_grain = grain / chain_lanes;
+  const int64_t group_grain = std::max<int64_t>(1, grain / group_strands_max);
   std::vector<Counts> counts(size_t(std::max((stepped_num + grain - 1) / grain,
                                              (groups_num + group_grain - 1) / group_grain)));
   const auto for_each_curve = [&](auto &&fn) {
@@ -698,14 +698,14 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
      * same result as substep by substep, with its data hot in cache). A strand that diverged
      * sits out the frame's remaining substeps. */
     for_each_group([&](const StrandGroup &group, Counts &chunk) {
-      int64_t active[chain_lanes];
+      int64_t active[group_strands_max];
       int64_t active_num = group.size;
       std::copy_n(group.curves, group.size, active);
       for (int64_t k = 0; k < active_num; k++) {
         prepare_strand(active[k], substeps[0].h);
       }
       for (const Substep &substep : substeps) {
-        uint8_t finite[chain_lanes];
+        uint8_t finite[group_strands_max];
         advance_strands(Span<int64_t>(active, active_num), substep, chunk,
                         MutableSpan<uint8_t>(finite, active_num));
         int64_t kept = 0;
@@ -738,7 +738,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
       /* A strand that has diverged stays on its rest shape, carried by the head, whatever the
        * passes do to its nodes, until the frame ends (the next frame starts it from there). */
       for_each_group([&](const StrandGroup &group, Counts &chunk) {
-        int64_t live[chain_lanes];
+        int64_t live[group_strands_max];
         int64_t live_num = 0;
         for (int64_t k = 0; k < group.size; k++) {
           if (diverged[size_t(group.curves[k])]) {
@@ -748,7 +748,7 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
             live[live_num++] = group.curves[k];
           }
         }
-        uint8_t finite[chain_lanes];
+        uint8_t finite[group_strands_max];
         advance_strands(Span<int64_t>(live, live_num), substep, chunk,
                         MutableSpan<uint8_t>(finite, live_num));
         for (int64_t k = 0; k < live_num; k++) {

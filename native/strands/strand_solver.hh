@@ -265,12 +265,13 @@ class StrandSolver {
   /* Strand `curve`'s root and root frame (r_frame) carried by the head to the end of the
    * substep; returns the wind at the root. */
   vec3 place_root(int64_t curve, const Substep &substep, mat3 &r_frame);
-  /* One substep of each of `curves` (at most chain_lanes, one point count: a group of
+  /* One substep of each of `curves` (at most group_strands_max, one point count: a group of
    * group_strands): the roots carried by the head, then the model's dynamics. r_finite[k] = 0
    * where strand k diverged (it is then counted and put back at rest). */
   void advance_strands(Span<int64_t> curves, const Substep &substep, Counts &counts,
                        MutableSpan<uint8_t> r_finite);
-  /* The stepped strands in groups of one point count, up to chain_lanes each (groups_). */
+  /* The stepped strands in groups of one point count, up to group_strands_max each
+   * (groups_). */
   void group_strands();
   /* Kurihara 1993 §2: each hinge alone (strand_dynamics_kurihara1993.cpp). */
   bool advance_kurihara(IndexRange points, const Substep &substep, mat3 frame,
@@ -278,10 +279,10 @@ class StrandSolver {
   /* False when a node of the strand is not finite or faster than runaway_speed. */
   bool strand_is_sane(int64_t curve) const;
   /* The articulated chain (strand_dynamics_articulated.cpp): one substep of up to
-   * chain_lanes strands of one point count, their roots placed (root_frames, winds), each
-   * cut into shorter steps while it turns fast (see articulated_step); the strands stepping
-   * together, their double-precision recursions in one vector. r_finite[k] = 0 where strand
-   * k ran away (the caller puts it at rest). */
+   * group_strands_max strands of one point count, their roots placed (root_frames, winds),
+   * each cut into shorter steps while it turns fast (see articulated_step); the strands
+   * stepping chain_lanes at a time, their double-precision recursions in one vector.
+   * r_finite[k] = 0 where strand k ran away (the caller puts it at rest). */
   void advance_articulated(Span<int64_t> curves, const Substep &substep, Span<mat3> root_frames,
                            Span<vec3> winds, Counts &counts, MutableSpan<uint8_t> r_finite);
   /* advance_articulated compiled for one vector code (articulated_vector_code()), the whole
@@ -399,8 +400,11 @@ class StrandSolver {
 
   /* Strands that the articulated model steps together (chain_lanes.hh: lane_width). */
   static constexpr int chain_lanes = 4;
+  /* Strands of one point count that advance a substep together, chain_lanes at a time; the
+   * more there are, the fuller the vectors of those that cut their substeps into steps. */
+  static constexpr int group_strands_max = 8 * chain_lanes;
   struct StrandGroup {
-    int64_t curves[chain_lanes];
+    int64_t curves[group_strands_max];
     int64_t size = 0;
   };
   std::vector<StrandGroup> groups_; /* the stepped strands, grouped (group_strands) */
