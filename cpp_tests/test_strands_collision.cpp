@@ -133,8 +133,8 @@ TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
    * lane and its neighbours, through everything a step does: contacts with the
    * sphere and the projection's impulses, the predictor steps after them, steps cut short
    * while the head shakes, and a last group that is not full; with each vector code the CPU
-   * runs (AVX-512, AVX2, baseline) against the widest's. Here 7 strands of 16 segments and 4 of 8, interleaved, draped over the
-   * sphere while the head turns back and forth. */
+   * runs (AVX-512, AVX2, baseline) against the widest's. Here 7 strands of 16 segments and
+   * 4 of 8, interleaved, draped over the sphere while the head turns back and forth. */
   const test::TestMesh sphere = test::uv_sphere(radius, 48, 24);
   const ColliderMesh mesh(sphere.vertices, sphere.triangles);
   CollisionParams collision;
