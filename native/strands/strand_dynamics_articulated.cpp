@@ -603,6 +603,11 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
     }
     angles_[i] += h * omega;
   }
+  /* The new angles' sines and cosines, all in one loop (the shape's loop below then calls
+   * nothing where no collider is, and keeps its frames in registers). */
+  for (size_t i = first; i < end; i++) {
+    trig_[i] = Deflection(angles_[i]).trig();
+  }
   uint8_t &known = accelerations_known_[size_t(curve)];
   known = uint8_t(std::min(known + 1, 2));
 
@@ -623,14 +628,15 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
     const mat3 chart = frame * rest_rotations_[i];
     Deflection deflection = keep_direction ?
                                 chart_deflection(chart, kept_direction, angles_[i]) :
-                                Deflection(angles_[i]);
+                                Deflection(trig_[i]);
     keep_direction = false;
     frame = deflection.rotate(chart);
     vec3 tip = node + d * frame[2];
     const vec2 rate = angular_velocities_[i];
     vec3 normal;
     const mat3 unprojected = frame;
-    if (project_segment(substep, node, tip, d, chart, angles_[i], angular_velocities_[i],
+    if (colliders_ != nullptr &&
+        project_segment(substep, node, tip, d, chart, angles_[i], angular_velocities_[i],
                         &normal))
     {
       angular_velocities_[i] = rate; /* the impulse stops it */
@@ -640,7 +646,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
       tip = node + d * frame[2];
       if (i + 1 < end) {
         keep_direction = true;
-        kept_direction = Deflection(angles_[i + 1]).rotate(unprojected * rest_rotations_[i + 1])[2];
+        kept_direction = Deflection(trig_[i + 1]).rotate(unprojected * rest_rotations_[i + 1])[2];
       }
     }
     trig_[i] = deflection.trig();
