@@ -126,15 +126,16 @@ TEST(StrandsCollision, DrapedHairStaysQuietWhateverTheConstraintsStiffness)
 
 TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
 {
-  /* The articulated model steps strands of one point count four at a time, their double-
+  /* The articulated model steps strands of one point count eight at a time, their double-
    * precision recursions in one vector (chain_lanes.hh). Each strand must come out with the
    * bits it has when simulated alone (in a group of one, the other lanes repeating it; the
    * same bits as the scalar step before the lanes: BM_StrandStep's result_hash), whatever its
    * lane and its neighbours, through everything a step does: contacts with the
    * sphere and the projection's impulses, the predictor steps after them, steps cut short
    * while the head shakes, and a last group that is not full; with each vector code the CPU
-   * runs (AVX-512, AVX2, baseline) against the widest's. Here 7 strands of 16 segments and
-   * 4 of 8, interleaved, draped over the sphere while the head turns back and forth. */
+   * runs (AVX-512, AVX2, baseline) against the widest's. Here 9 strands of 16 segments (a full
+   * vector and one more) and 5 of 8, interleaved, draped over the sphere while the head turns
+   * back and forth. */
   const test::TestMesh sphere = test::uv_sphere(radius, 48, 24);
   const ColliderMesh mesh(sphere.vertices, sphere.triangles);
   CollisionParams collision;
@@ -144,10 +145,10 @@ TEST(StrandsCollision, LanesGiveEachStrandItsOwnBits)
     std::vector<int32_t> offsets{0};
     std::vector<vec3> positions, normals;
   };
-  std::vector<Groom> alone(11);
+  std::vector<Groom> alone(14);
   Groom together;
-  for (int s = 0; s < 11; s++) {
-    const float angle = 2.0f * float(M_PI) * float(s) / 11.0f;
+  for (int s = 0; s < 14; s++) {
+    const float angle = 2.0f * float(M_PI) * float(s) / 14.0f;
     const vec3 out(std::cos(angle), std::sin(angle), 0.0f);
     const vec3 root = vec3(0.0f, 0.0f, radius * 1.01f) + 0.02f * out;
     const int segments = s % 3 == 1 ? 8 : 16;

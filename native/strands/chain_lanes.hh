@@ -20,14 +20,20 @@
 
 namespace hairdyn::chain {
 
-constexpr int lane_width = 4;
-typedef double Lanes __attribute__((vector_size(lane_width * sizeof(double))));
-/* The same lanes in single precision (what pass 1 computes, widened exactly to Lanes). */
-typedef float Floats __attribute__((vector_size(lane_width * sizeof(float))));
+/* W doubles in one GCC/Clang vector (Lanes), and the same lanes in single precision (Floats,
+ * what pass 1 computes, widened exactly to Lanes). Each vector code steps the width its
+ * registers hold best (strand_dynamics_articulated.cpp): 8 with AVX-512, 4 otherwise. */
+template<int W> struct LaneTypes {
+  typedef double Lanes __attribute__((vector_size(W * sizeof(double))));
+  typedef float Floats __attribute__((vector_size(W * sizeof(float))));
+};
+template<int W> using Lanes = typename LaneTypes<W>::Lanes;
+template<int W> using Floats = typename LaneTypes<W>::Floats;
+constexpr int max_lane_width = 8;
 /* What memory the vector code reads must be aligned to: GCC gives a vector only 16-byte
  * alignment where AVX is off (and drops an alignment attribute on a template argument),
  * while the AVX code it calls loads it assuming its full size. */
-constexpr size_t lane_alignment = sizeof(Lanes);
+constexpr size_t lane_alignment = sizeof(Lanes<max_lane_width>);
 
 #define HAIRDYN_CHAIN_INLINE [[gnu::always_inline]] inline
 /* The same for a lambda (after its parameters): inlined into each clone of its caller, it
@@ -48,94 +54,91 @@ template<class R> struct M3 {
   V3<R> c[3];
 };
 
-/* One lane: writing it (pass 1's single-precision lanes) and reading it. */
-HAIRDYN_CHAIN_INLINE void put(V2<Floats> &v, const int lane, const glm::vec2 &value)
+/* One lane: writing it (pass 1's single-precision lanes) and reading it (as glm's float or
+ * double values). The vector type R of a lane's scalar is any of Lanes and Floats. */
+template<class R> HAIRDYN_CHAIN_INLINE void put(V2<R> &v, const int lane, const glm::vec2 &value)
 {
   v.x[lane] = value.x;
   v.y[lane] = value.y;
 }
-HAIRDYN_CHAIN_INLINE void put(V3<Floats> &v, const int lane, const glm::vec3 &value)
+template<class R> HAIRDYN_CHAIN_INLINE void put(V3<R> &v, const int lane, const glm::vec3 &value)
 {
   v.x[lane] = value.x;
   v.y[lane] = value.y;
   v.z[lane] = value.z;
 }
-HAIRDYN_CHAIN_INLINE float get(const Floats &x, const int lane)
+template<class R> HAIRDYN_CHAIN_INLINE auto get(const R &x, const int lane) -> decltype(+x[lane])
 {
   return x[lane];
 }
-HAIRDYN_CHAIN_INLINE glm::vec3 get(const V3<Floats> &v, const int lane)
+template<class R> HAIRDYN_CHAIN_INLINE auto get(const V2<R> &v, const int lane)
 {
-  return glm::vec3(v.x[lane], v.y[lane], v.z[lane]);
+  return glm::vec<2, decltype(get(v.x, lane))>(get(v.x, lane), get(v.y, lane));
 }
-HAIRDYN_CHAIN_INLINE double get(const Lanes &x, const int lane)
+template<class R> HAIRDYN_CHAIN_INLINE auto get(const V3<R> &v, const int lane)
 {
-  return x[lane];
+  return glm::vec<3, decltype(get(v.x, lane))>(get(v.x, lane), get(v.y, lane), get(v.z, lane));
 }
-HAIRDYN_CHAIN_INLINE glm::dvec2 get(const V2<Lanes> &v, const int lane)
+template<class R> HAIRDYN_CHAIN_INLINE auto get(const M2<R> &m, const int lane)
 {
-  return glm::dvec2(get(v.x, lane), get(v.y, lane));
-}
-HAIRDYN_CHAIN_INLINE glm::dvec3 get(const V3<Lanes> &v, const int lane)
-{
-  return glm::dvec3(get(v.x, lane), get(v.y, lane), get(v.z, lane));
-}
-HAIRDYN_CHAIN_INLINE glm::dmat2 get(const M2<Lanes> &m, const int lane)
-{
-  return glm::dmat2(get(m.c[0], lane), get(m.c[1], lane));
+  return glm::mat<2, 2, decltype(get(m.c[0].x, lane))>(get(m.c[0], lane), get(m.c[1], lane));
 }
 
-/* Single-precision lanes with one value for every lane (a glm scalar, vector or matrix):
+/* Single-precision lanes F with one value for every lane (a glm scalar, vector or matrix):
  * the same operations as glm's on each lane. */
-HAIRDYN_CHAIN_INLINE V3<Floats> operator*(const float s, const V3<Floats> &v)
+template<class F> HAIRDYN_CHAIN_INLINE V3<F> operator*(const float s, const V3<F> &v)
 {
   return { s * v.x, s * v.y, s * v.z };
 }
-HAIRDYN_CHAIN_INLINE V3<Floats> operator-(const V3<Floats> &a, const glm::vec3 &b)
+template<class F> HAIRDYN_CHAIN_INLINE V3<F> operator-(const V3<F> &a, const glm::vec3 &b)
 {
   return { a.x - b.x, a.y - b.y, a.z - b.z };
 }
-HAIRDYN_CHAIN_INLINE V3<Floats> operator+(const glm::vec3 &a, const V3<Floats> &b)
+template<class F> HAIRDYN_CHAIN_INLINE V3<F> operator+(const glm::vec3 &a, const V3<F> &b)
 {
   return { a.x + b.x, a.y + b.y, a.z + b.z };
 }
-HAIRDYN_CHAIN_INLINE V3<Floats> operator*(const glm::mat3 &m, const V3<Floats> &v)
+template<class F> HAIRDYN_CHAIN_INLINE V3<F> operator*(const glm::mat3 &m, const V3<F> &v)
 {
   return { m[0][0] * v.x + m[1][0] * v.y + m[2][0] * v.z,
            m[0][1] * v.x + m[1][1] * v.y + m[2][1] * v.z,
            m[0][2] * v.x + m[1][2] * v.y + m[2][2] * v.z };
 }
-HAIRDYN_CHAIN_INLINE V3<Floats> cross(const glm::vec3 &x, const V3<Floats> &y)
+template<class F> HAIRDYN_CHAIN_INLINE V3<F> cross(const glm::vec3 &x, const V3<F> &y)
 {
   return { x.y * y.z - y.y * x.z, x.z * y.x - y.z * x.x, x.x * y.y - y.x * x.y };
 }
 /* Each lane's square root (correctly rounded, as std::sqrt). */
-HAIRDYN_CHAIN_INLINE Floats sqrt(const Floats &x)
+template<class F> HAIRDYN_CHAIN_INLINE auto sqrt(const F &x) -> decltype(x[0], F())
 {
-  Floats r;
-  for (int lane = 0; lane < lane_width; lane++) {
+  F r;
+  for (int lane = 0; lane < int(sizeof(F) / sizeof(x[0])); lane++) {
     r[lane] = std::sqrt(x[lane]);
   }
   return r;
 }
 /* std::max(a, b) in each lane: (a < b) ? b : a. */
-HAIRDYN_CHAIN_INLINE Floats max(const Floats &a, const Floats &b)
+template<class F> HAIRDYN_CHAIN_INLINE auto max(const F &a, const F &b) -> decltype(a[0], F())
 {
   return a < b ? b : a;
 }
 
-/* Single-precision lanes in double precision (exact). */
-HAIRDYN_CHAIN_INLINE Lanes widen(const Floats &x)
+/* Single-precision lanes in double precision (exact), for each width a vector code steps. */
+HAIRDYN_CHAIN_INLINE Lanes<4> widen(const Floats<4> &x)
 {
-  return __builtin_convertvector(x, Lanes);
+  return __builtin_convertvector(x, Lanes<4>);
 }
-HAIRDYN_CHAIN_INLINE V2<Lanes> widen(const V2<Floats> &v)
+HAIRDYN_CHAIN_INLINE Lanes<8> widen(const Floats<8> &x)
 {
-  return { widen(v.x), widen(v.y) };
+  return __builtin_convertvector(x, Lanes<8>);
 }
-HAIRDYN_CHAIN_INLINE V3<Lanes> widen(const V3<Floats> &v)
+template<class F> HAIRDYN_CHAIN_INLINE auto widen(const V2<F> &v)
 {
-  return { widen(v.x), widen(v.y), widen(v.z) };
+  return V2<decltype(widen(v.x))>{ widen(v.x), widen(v.y) };
+}
+template<class F> HAIRDYN_CHAIN_INLINE auto widen(const V3<F> &v)
+{
+  return V3<decltype(widen(v.x))>{ widen(v.x), widen(v.y), widen(v.z) };
 }
 template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator+(const V2<R> &a, const V2<R> &b)
 {

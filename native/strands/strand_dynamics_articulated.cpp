@@ -54,12 +54,13 @@
  * moves on its own) changes the generalised momentum of everything distal to it, and fed a
  * whipping chain energy until it ran away.
  *
- * Strands of one point count step four at a time (StrandSolver::group_strands): pass 1 (the
- * shape and forces) in vectors of four floats, the tips' contacts queried strand by strand;
- * passes 2 and 3 in vectors of four doubles (strands/chain_lanes.hh), every operation as glm
- * evaluates it, so a strand keeps the bits it has alone (test LanesGiveEachStrandItsOwnBits);
- * the commit with its projection strand by strand. Each strand predicts and cuts its steps on
- * its own; a lane without a strand in a stage repeats another's, its result dropped. */
+ * Strands of one point count step W at a time (StrandSolver::group_strands; W = 8 with
+ * AVX-512, 4 otherwise): pass 1 (the shape and forces) in vectors of W floats, the tips'
+ * contacts queried strand by strand; passes 2 and 3 in vectors of W doubles
+ * (strands/chain_lanes.hh), every operation as glm evaluates it, so a strand keeps the bits
+ * it has alone (test LanesGiveEachStrandItsOwnBits); the commit with its projection strand by
+ * strand. Each strand predicts and cuts its steps on its own; a lane without a strand in a
+ * stage repeats another's, its result dropped. */
 #include <algorithm>
 #include <atomic>
 #include <cassert>
@@ -67,15 +68,16 @@
 #include <cstring>
 #include <vector>
 
+/* The lane functions are always inlined (those of chain_lanes.hh, and ForceField::on_segment
+ * on lanes): no vector crosses a call, so GCC's note that one would pass differently with and
+ * without AVX does not apply. Set before the headers, whose templates it instantiates. */
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 #include "core/cpu.hh"
 #include "groom/groom.hh"
 #include "strands/chain_lanes.hh"
 #include "strands/deflection.hh"
 #include "strands/strand_solver.hh"
-
-/* The lane functions are always inlined: no vector of Lanes crosses a call, so GCC's note
- * that one would pass differently with and without AVX does not apply (chain_lanes.hh). */
-#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace hairdyn {
 
@@ -88,27 +90,26 @@ using rvec2 = glm::dvec2;
 using rvec3 = glm::dvec3;
 using rmat2 = glm::dmat2;
 
-/* What pass 1 hands the recursion for one body, in single precision, one lane per strand:
- * the recursion widens it and builds the rod's inertia and bias forces from it. */
-struct alignas(chain::lane_alignment) StrandSolver::ArticulatedTerms {
-  chain::V3<chain::Floats> t, e_theta, pole; /* the segment's direction, frame[1] and its
-                                              * chart's x axis */
-  chain::V3<chain::Floats> arm;              /* r, from the parent's hinge point to this one */
-  chain::V3<chain::Floats> parent_omega;     /* the parent's turn, relative to the head */
-  chain::V3<chain::Floats> relative_turn;    /* θ̇ e_θ − φ̇ x across the hinge */
-  chain::V3<chain::Floats> omega;            /* the segment's turn */
-  chain::V3<chain::Floats> half;             /* d t / 2, to the segment's centre */
-  chain::V3<chain::Floats> force;            /* F at the centre */
-  chain::Floats rate_product;                /* θ̇ φ̇ */
-  chain::Floats m, d, k;                     /* mass, length, hinge stiffness */
-  chain::V2<chain::Floats> angles, rates;    /* q, q̇ */
+/* What pass 1 hands the recursion for one body, in single precision, one lane per strand of
+ * W: the recursion widens it and builds the rod's inertia and bias forces from it. */
+template<int W> struct alignas(chain::lane_alignment) StrandSolver::ArticulatedTerms {
+  using F = chain::Floats<W>;
+  chain::V3<F> t, e_theta, pole; /* the segment's direction, frame[1] and its chart's x axis */
+  chain::V3<F> arm;              /* r, from the parent's hinge point to this one */
+  chain::V3<F> parent_omega;     /* the parent's turn, relative to the head */
+  chain::V3<F> relative_turn;    /* θ̇ e_θ − φ̇ x across the hinge */
+  chain::V3<F> omega;            /* the segment's turn */
+  chain::V3<F> half;             /* d t / 2, to the segment's centre */
+  chain::V3<F> force;            /* F at the centre */
+  F rate_product;                /* θ̇ φ̇ */
+  F m, d, k;                     /* mass, length, hinge stiffness */
+  chain::V2<F> angles, rates;    /* q, q̇ */
 };
 
 namespace {
 
 using chain::get;
 using chain::Lanes;
-using chain::lane_width;
 using chain::M2;
 using chain::M3;
 using chain::put;
@@ -259,17 +260,23 @@ template<class R> HAIRDYN_CHAIN_INLINE void root_to_tip(Link<R> *links, const si
   }
 }
 
-using Terms = StrandSolver::ArticulatedTerms;
-
 /* Which vector code the step runs (core/cpu.hh): each has its clone of the whole substep
  * (advance_articulated_as), every lane's bits the same on all (chain_lanes.hh). */
 std::atomic<VectorCode> vector_code{cpu_vector_code()};
 
-/* A step's scratch, per lane: pass 1's bodies and the mid-step rates' q̈; the recursion's
- * links; a strand's q̈ and its projected segments (body, outward normal). */
-thread_local std::vector<vec2> lane_mid_accelerations[lane_width];
-thread_local std::vector<Link<Lanes>> lane_links;
-thread_local std::vector<Terms> lane_terms;
+/* A step's scratch for W lanes: the mid-step rates' q̈ per lane, pass 1's bodies and the
+ * recursion's links. */
+template<int W> struct LaneScratch {
+  std::vector<vec2> mid_accelerations[W];
+  std::vector<StrandSolver::ArticulatedTerms<W>> terms;
+  std::vector<Link<Lanes<W>>> links;
+};
+template<int W> LaneScratch<W> &lane_scratch()
+{
+  thread_local LaneScratch<W> scratch;
+  return scratch;
+}
+/* A strand's q̈ and its projected segments (body, outward normal). */
 thread_local std::vector<vec2> accelerations;
 thread_local std::vector<std::pair<size_t, vec3>> stops;
 
@@ -288,7 +295,7 @@ inline rvec3 real(const vec3 &v)
  * included): tip to root, the impulse's bias p^A = (−reach × n, −n) at `hit` and its share
  * p^a = p^A + U D⁻¹ u, u = −Sᵀ p^A, handed to the parents; root to tip,
  * Δq̇ = D⁻¹ (u − Uᵀ a'). The kinetic energy changes by −v_n² / (2 n · Δv(n)) ≤ 0. */
-template<class R>
+template<class R, class Terms>
 void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, const size_t n,
                      const size_t hit, const rvec3 &n_out, const MutableSpan<vec2> rates)
 {
@@ -350,6 +357,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
 
 }  // namespace
 
+template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_substep(
     const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,
     const Span<vec3> winds, Counts &counts, const MutableSpan<uint8_t> r_finite)
@@ -379,8 +387,8 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
   /* Per strand, the nodes where its substep began, if it cut it into steps. */
   thread_local std::vector<vec3> substep_start[group_strands_max];
   while (active_num > 0) {
-    /* One step of every strand still stepping, chain_lanes at a time: those that cut their
-     * steps fill the vectors together, whichever strands they stepped beside at first. */
+    /* One step of every strand still stepping, W at a time: those that cut their steps fill
+     * the vectors together, whichever strands they stepped beside at first. */
     int64_t step_curves[group_strands_max];
     Substep step_of[group_strands_max];
     uint8_t may_split[group_strands_max];
@@ -402,9 +410,9 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
       step_winds[j] = winds[k];
     }
     int outcomes[group_strands_max];
-    for (int64_t first = 0; first < active_num; first += chain_lanes) {
-      const int64_t num = std::min<int64_t>(chain_lanes, active_num - first);
-      articulated_step(Span<int64_t>(step_curves + first, num), Span<Substep>(step_of + first, num),
+    for (int64_t first = 0; first < active_num; first += W) {
+      const int64_t num = std::min<int64_t>(W, active_num - first);
+      articulated_step<W>(Span<int64_t>(step_curves + first, num), Span<Substep>(step_of + first, num),
                        Span<uint8_t>(may_split + first, num), Span<mat3>(frames + first, num),
                        Span<vec3>(step_winds + first, num), counts,
                        MutableSpan<int>(outcomes + first, num));
@@ -470,19 +478,20 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
  * uninitialised: a false positive of its vector element insertion. */
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_forward(
     const Span<int64_t> curves, const Span<Substep> steps, const Span<mat3> root_frames,
     const Span<vec3> winds, const Span<const vec2 *> mid_accelerations,
-    const Span<uint8_t> queried, ArticulatedTerms *terms, float *r_fastest_turn,
+    const Span<uint8_t> queried, ArticulatedTerms<W> *terms, float *r_fastest_turn,
     Counts *r_counts) const
 {
-  /* Pass 1, root to tip (Table 7.1, first loop), lane_width strands at once: geometry,
+  /* Pass 1, root to tip (Table 7.1, first loop), W strands at once: geometry,
    * relative velocities, the rates at the middle of the step and the external force F on
    * each rod, every operation glm's on each lane (the rod's inertia and bias forces follow
    * from these terms in double precision: tip_to_root). */
-  using chain::Floats;
-  size_t first[lane_width];
-  for (int lane = 0; lane < lane_width; lane++) {
+  using Floats = chain::Floats<W>;
+  size_t first[W];
+  for (int lane = 0; lane < W; lane++) {
     first[lane] = size_t(curve_offsets_[size_t(curves[lane])]) + 1;
   }
   const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
@@ -494,7 +503,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
   Floats h{};
   M3<Floats> frame{};
   V3<Floats> node{}, wind{};
-  for (int lane = 0; lane < lane_width; lane++) {
+  for (int lane = 0; lane < W; lane++) {
     h[lane] = steps[lane].h;
     for (int j = 0; j < 3; j++) {
       put(frame.c[j], lane, root_frames[lane][j]);
@@ -511,7 +520,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
     M3<Floats> rest{};
     Floats trig[4]{}, d{}, k{};
     V2<Floats> rates{}, mid{}, angles{};
-    for (int lane = 0; lane < lane_width; lane++) {
+    for (int lane = 0; lane < W; lane++) {
       const size_t p = first[lane] + i;
       for (int j = 0; j < 3; j++) {
         put(rest.c[j], lane, rest_rotations_[p][j]);
@@ -546,7 +555,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
     const V3<Floats> tip_velocity = node_velocity + cross(omega, d * t) +
                                     shared.head_velocity.of_point(tip - head_center);
     V3<Floats> force = shared.forces.on_segment(d, center, center_velocity, wind, h);
-    for (int lane = 0; colliders_ != nullptr && lane < lane_width; lane++) {
+    for (int lane = 0; colliders_ != nullptr && lane < W; lane++) {
       Contact contact;
       if (queried[lane] && colliders_->find_contact(get(tip, lane), contact)) {
         put(force, lane,
@@ -556,7 +565,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
       }
     }
 
-    ArticulatedTerms &x = terms[i];
+    ArticulatedTerms<W> &x = terms[i];
     x.t = t;
     x.e_theta = e_theta;
     x.pole = pole;
@@ -576,7 +585,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
     parent_omega = omega;
     arm = d * t;
   }
-  for (int lane = 0; lane < lane_width; lane++) {
+  for (int lane = 0; lane < W; lane++) {
     r_fastest_turn[lane] = fastest_turn[lane];
   }
 }
@@ -660,28 +669,32 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
   return true;
 }
 
+template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_step(
     const Span<int64_t> curves, const Span<Substep> steps, const Span<uint8_t> may_split,
     const Span<mat3> root_frames, const Span<vec3> winds, Counts &counts,
     const MutableSpan<int> r_outcomes)
 {
-  static_assert(lane_width == chain_lanes);
-  assert(curves.size() >= 1 && curves.size() <= lane_width);
+  assert(curves.size() >= 1 && curves.size() <= W);
   const int lanes_num = int(curves.size());
   const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
+  LaneScratch<W> &scratch = lane_scratch<W>();
+  std::vector<vec2> *lane_mid_accelerations = scratch.mid_accelerations;
+  std::vector<Link<Lanes<W>>> &lane_links = scratch.links;
+  std::vector<ArticulatedTerms<W>> &lane_terms = scratch.terms;
   lane_links.resize(n);
   lane_terms.resize(n);
   accelerations.resize(n);
   /* Every lane holds a strand: those past the group's repeat its first (their results are
    * dropped). */
-  int64_t lane_curves[lane_width];
-  Substep lane_steps[lane_width];
-  mat3 lane_frames[lane_width];
-  vec3 lane_winds[lane_width];
-  const vec2 *mids[lane_width];
-  bool predict[lane_width];
+  int64_t lane_curves[W];
+  Substep lane_steps[W];
+  mat3 lane_frames[W];
+  vec3 lane_winds[W];
+  const vec2 *mids[W];
+  bool predict[W];
   bool any_predict = false;
-  for (int lane = 0; lane < lane_width; lane++) {
+  for (int lane = 0; lane < W; lane++) {
     const int from = lane < lanes_num ? lane : 0;
     lane_curves[lane] = curves[from];
     lane_steps[lane] = steps[from];
@@ -707,20 +720,18 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
   /* Pass 1 (the contacts queried for the strands that take part, `queried`), then passes 2
    * and 3, for all lanes in vectors. */
   const bool implicit = params_.integrator == Integrator::Implicit;
-  float fastest_turn[lane_width];
-  Counts lane_counts[lane_width];
+  float fastest_turn[W];
+  Counts lane_counts[W];
   const auto stage = [&](const uint8_t *queried) HAIRDYN_CHAIN_INLINE_LAMBDA {
-    double hd[lane_width];
-    for (int lane = 0; lane < lane_width; lane++) {
+    double hd[W];
+    for (int lane = 0; lane < W; lane++) {
       hd[lane] = double(lane_steps[lane].h);
       lane_counts[lane] = Counts();
     }
-    articulated_forward(Span<int64_t>(lane_curves, lane_width),
-                        Span<Substep>(lane_steps, lane_width), Span<mat3>(lane_frames, lane_width),
-                        Span<vec3>(lane_winds, lane_width),
-                        Span<const vec2 *>(mids, lane_width),
-                        Span<uint8_t>(queried, lane_width), lane_terms.data(), fastest_turn,
-                        lane_counts);
+    articulated_forward<W>(Span<int64_t>(lane_curves, W), Span<Substep>(lane_steps, W),
+                           Span<mat3>(lane_frames, W), Span<vec3>(lane_winds, W),
+                           Span<const vec2 *>(mids, W), Span<uint8_t>(queried, W),
+                           lane_terms.data(), fastest_turn, lane_counts);
     /* Passes 2 and 3 for all lanes. */
     tip_to_root(lane_links.data(), lane_terms.data(), n, hd, implicit,
                 double(params_.bending_damping));
@@ -729,9 +740,9 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
   /* Stage 0, for the strands whose trend is not known: the predictor's q̈ at the step's start
    * rates (the fastest turn, and so a cut step, judged on them); stage 1 takes the step from
    * the rates at its middle (see the top). */
-  uint8_t queried[lane_width];
+  uint8_t queried[W];
   if (any_predict) {
-    for (int lane = 0; lane < lane_width; lane++) {
+    for (int lane = 0; lane < W; lane++) {
       queried[lane] = predict[lane];
       if (predict[lane]) {
         mid_step_accelerations(curves[lane], lane_mid_accelerations[lane]);
@@ -747,7 +758,7 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
       }
     }
   }
-  for (int lane = 0; lane < lane_width; lane++) {
+  for (int lane = 0; lane < W; lane++) {
     queried[lane] = lane < lanes_num && r_outcomes[lane] == 1;
     if (queried[lane] && !predict[lane]) {
       mid_step_accelerations(curves[lane], lane_mid_accelerations[lane]);
@@ -779,15 +790,17 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
   }
 }
 
-/* Each vector code's clone of the substep. AVX-512 runs on the same 256-bit vectors as AVX2
- * but has 32 registers, where the recursion's 3×3 blocks of four lanes spill from AVX2's 16
- * (1.2× faster on BM_StrandStep than AVX2, the same bits). */
+/* Each vector code's clone of the substep, with the lane width its registers hold best:
+ * AVX-512 steps eight strands at once (the recursion's doubles in 512-bit vectors, pass 1's
+ * floats in 256-bit ones, and 32 registers for the 3×3 blocks), AVX2 and the baseline four
+ * (eight lanes on AVX2's 16 registers spill: 1.6× slower). On BM_StrandStep, 1 core: AVX-512
+ * 34 ms, AVX2 51 ms, baseline 86 ms; the same bits on all. */
 template<>
 void StrandSolver::advance_articulated_as<VectorCode::Baseline>(
     const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,
     const Span<vec3> winds, Counts &counts, const MutableSpan<uint8_t> r_finite)
 {
-  articulated_substep(curves, substep, root_frames, winds, counts, r_finite);
+  articulated_substep<4>(curves, substep, root_frames, winds, counts, r_finite);
 }
 #if defined(__x86_64__)
 template<>
@@ -795,7 +808,7 @@ __attribute__((target("avx2"))) void StrandSolver::advance_articulated_as<Vector
     const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,
     const Span<vec3> winds, Counts &counts, const MutableSpan<uint8_t> r_finite)
 {
-  articulated_substep(curves, substep, root_frames, winds, counts, r_finite);
+  articulated_substep<4>(curves, substep, root_frames, winds, counts, r_finite);
 }
 template<>
 __attribute__((target("avx2,avx512f,avx512vl,prefer-vector-width=256"))) void
@@ -803,7 +816,7 @@ StrandSolver::advance_articulated_as<VectorCode::Avx512>(
     const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,
     const Span<vec3> winds, Counts &counts, const MutableSpan<uint8_t> r_finite)
 {
-  articulated_substep(curves, substep, root_frames, winds, counts, r_finite);
+  articulated_substep<8>(curves, substep, root_frames, winds, counts, r_finite);
 }
 #endif
 

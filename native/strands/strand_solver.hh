@@ -246,8 +246,8 @@ class StrandSolver {
   float segment_length(int64_t point) const { return rest_lengths_[size_t(point)]; }
 
  /* What pass 1 of the articulated step hands its recursion for a segment, for the strands of
-   * a group (strand_dynamics_articulated.cpp). */
-  struct ArticulatedTerms;
+   * a group, W at once (strand_dynamics_articulated.cpp). */
+  template<int W> struct ArticulatedTerms;
 
  private:
   struct Counts {
@@ -281,38 +281,42 @@ class StrandSolver {
   /* The articulated chain (strand_dynamics_articulated.cpp): one substep of up to
    * group_strands_max strands of one point count, their roots placed (root_frames, winds),
    * each cut into shorter steps while it turns fast (see articulated_step); the strands
-   * stepping chain_lanes at a time, their double-precision recursions in one vector.
-   * r_finite[k] = 0 where strand k ran away (the caller puts it at rest). */
+   * stepping W at a time (the vector code's lanes), their double-precision recursions in one
+   * vector. r_finite[k] = 0 where strand k ran away (the caller puts it at rest). */
   void advance_articulated(Span<int64_t> curves, const Substep &substep, Span<mat3> root_frames,
                            Span<vec3> winds, Counts &counts, MutableSpan<uint8_t> r_finite);
   /* advance_articulated compiled for one vector code (articulated_vector_code()), the whole
-   * substep inlined into it: articulated_substep, then articulated_step and its passes. */
+   * substep inlined into it: articulated_substep with the code's lane width W, then
+   * articulated_step and its passes. */
   template<VectorCode code>
   void advance_articulated_as(Span<int64_t> curves, const Substep &substep,
                               Span<mat3> root_frames, Span<vec3> winds, Counts &counts,
                               MutableSpan<uint8_t> r_finite);
+  template<int W>
   void articulated_substep(Span<int64_t> curves, const Substep &substep, Span<mat3> root_frames,
                            Span<vec3> winds, Counts &counts, MutableSpan<uint8_t> r_finite);
-  /* One step of steps[k].h for each of `curves` (one point count, up to chain_lanes).
+  /* One step of steps[k].h for each of `curves` (one point count, up to W).
    * r_outcomes[k]: 1 when strand k took it; -1 when it ran away; n > 1 when it may cut its
    * step (may_split[k]) and turns more than max_turn_per_step within it: then it is left
    * unchanged, and n equal steps (at most max_turn_steps) keep every turn within the bound.
    * Each strand's bits are those it has stepped alone. */
+  template<int W>
   void articulated_step(Span<int64_t> curves, Span<Substep> steps, Span<uint8_t> may_split,
                         Span<mat3> root_frames, Span<vec3> winds, Counts &counts,
                         MutableSpan<int> r_outcomes);
   /* The q̈ that the mid-step rates of strand `curve`'s next step take: the last two steps'
    * extrapolated, or zeros (a predictor stage's) when they are not both known. */
   void mid_step_accelerations(int64_t curve, MutableSpan<vec2> r_accelerations) const;
-  /* Pass 1 of an articulated step, root to tip, for chain_lanes strands of one point count at
-   * once, one lane each (a lane may repeat another's strand): the shape, the rates at the
+  /* Pass 1 of an articulated step, root to tip, for W strands of one point count at once,
+   * one lane each (a lane may repeat another's strand): the shape, the rates at the
    * middle of the step (q̇ + h q̈ / 2 with q̈ = mid_accelerations[lane]), the velocity
    * products, the external forces (the tips' contacts queried in the lanes `queried`, and
    * counted per lane in r_counts) and the hinges, into `terms` (one per segment). Writes each
    * lane's fastest turn (rad/s) of a segment or across a hinge. */
+  template<int W>
   void articulated_forward(Span<int64_t> curves, Span<Substep> steps, Span<mat3> root_frames,
                            Span<vec3> winds, Span<const vec2 *> mid_accelerations,
-                           Span<uint8_t> queried, ArticulatedTerms *terms,
+                           Span<uint8_t> queried, ArticulatedTerms<W> *terms,
                            float *r_fastest_turn, Counts *r_counts) const;
   /* The step's hinge accelerations into rates and angles, then the new shape with the
    * no-penetration projection; the projected segments are left in a list whose impulses the
@@ -398,11 +402,10 @@ class StrandSolver {
   std::vector<int64_t> pins_;
   std::vector<vec3> pins_rest_head_;
 
-  /* Strands that the articulated model steps together (chain_lanes.hh: lane_width). */
-  static constexpr int chain_lanes = 4;
-  /* Strands of one point count that advance a substep together, chain_lanes at a time; the
-   * more there are, the fuller the vectors of those that cut their substeps into steps. */
-  static constexpr int group_strands_max = 8 * chain_lanes;
+  /* Strands of one point count that advance a substep together, as many at a time as the
+   * vector code has lanes (chain_lanes.hh); the more there are, the fuller the vectors of
+   * those that cut their substeps into steps. */
+  static constexpr int group_strands_max = 32;
   struct StrandGroup {
     int64_t curves[group_strands_max];
     int64_t size = 0;
