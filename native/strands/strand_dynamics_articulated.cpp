@@ -10,10 +10,12 @@
  * root); accelerations are classical (ω̇, a_P), so a rigid rod of mass m, centre at h from P,
  * obeys (τ_P, f) = I_P (ω̇, a_P) + p with
  *
- *   I_P = [ (m d²/3)(1 − t tᵀ)   m [h]× ]      p = ( −(m d²/3)(t·ω)(ω × t) − h × F,
- *         [ −m [h]×              m 1    ]            m ω × (ω × h) − F )
+ *   I_P = [ (m d²/3) 1   m [h]× ]      p = ( −h × F,
+ *         [ −m [h]×      m 1    ]            m ω × (ω × h) − F )
  *
- * (Newton–Euler about P; F the external force at the centre, t the rod's direction).
+ * (Newton–Euler about P; F the external force at the centre, t the rod's direction). The
+ * rod's inertia about P is m d²/3 about its own axis too (see tip_to_root), so it is
+ * isotropic and has no gyroscopic torque ω × (I ω).
  * Moving a reference point by r (motion at P_child = motion at P_parent shifted by r):
  * X = [1 0; −[r]× 1], inertia Xᵀ I X, force (τ + r × f, f) (Featherstone eq. 2.21, 2.24).
  *
@@ -129,16 +131,6 @@ template<class R> struct alignas(chain::lane_alignment) Link {
   V2<R> acceleration;        /* q̈, pass 3's result */
 };
 
-/* A segment's inertia about its own axis, as a share of its transverse inertia. A thin
- * rod's is nearly 0, but a segment never spins by itself: a hinge turns it about its own
- * axis only near the chart's pole (θ = ±π/2, where φ̇ just twists the segment), and there a
- * near-zero inertia let φ̇ grow without bound for a finite motion: the chain ran away (a
- * strand blown flat against the head bends its first segment there). With the transverse
- * inertia about its axis too, turning through the pole costs what any other turn does, as
- * for Kurihara 1993's hinges (eq. 1: the same I for θ and φ); away from the pole the twist
- * is φ̇ sin θ, so bending near rest is unchanged to second order. */
-constexpr float axial_inertia_share = 1.0f;
-
 /* Pass 2, tip to root (Table 7.1, second loop), each body's rod built from pass 1's terms as
  * the pass reaches it (in double precision; step_lengths: each lane's h): its hinge axes and
  * velocity products, its inertia at P_i and bias force, and the hinge torque; then U = I^A S,
@@ -146,9 +138,17 @@ constexpr float axial_inertia_share = 1.0f;
  * its hinge absorbs, I^a = I^A − U D⁻¹ Uᵀ and p^a = p^A + I^a c + U D⁻¹ u, moved to the
  * parent's hinge point and handed to it.
  *
- * The rod's inertia about P_i is m d² / 3 about every axis through P_i, its own axis included
- * (see axial_inertia_share), with the gyroscopic torque ω × (I ω) of that inertia; the hinge
- * spring and damper are linearly implicit (see the top of the file). */
+ * The rod's inertia about P_i is m d² / 3 about every axis through P_i, its own axis
+ * included. A thin rod's about its axis is nearly 0, but a segment never spins by itself: a
+ * hinge turns it about its own axis only near the chart's pole (θ = ±π/2, where φ̇ just
+ * twists the segment), and there a near-zero inertia let φ̇ grow without bound for a finite
+ * motion: the chain ran away (a strand blown flat against the head bends its first segment
+ * there). With the transverse inertia about its axis too, turning through the pole costs what
+ * any other turn does, as for Kurihara 1993's hinges (eq. 1: the same I for θ and φ); away
+ * from the pole the twist is φ̇ sin θ, so bending near rest is unchanged to second order. An
+ * isotropic inertia has no gyroscopic torque, and adds to the child's I^a on the diagonals
+ * only: I^A = I^a_child + (m d² / 3, m [h]×, m) blockwise. The hinge spring and damper are
+ * linearly implicit (see the top of the file). */
 template<class R, class Terms>
 HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const size_t n,
                                       const double *step_lengths, const bool implicit,
@@ -157,9 +157,6 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
   R hd;
   std::memcpy(&hd, step_lengths, sizeof(hd)); /* no alignment assumed */
   const R zero{};
-  const R one = zero + 1.0;
-  const R spinless = zero + (1.0 - double(axial_inertia_share));
-  const M3<R> identity{{{one, zero, zero}, {zero, one, zero}, {zero, zero, one}}};
   /* What the child hands its parent: its I^a and p^a moved to the parent's hinge point (none
    * for the tip). */
   M3<R> child_a{}, child_b{}, child_c{};
@@ -167,7 +164,7 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
   for (size_t i = n; i-- > 0;) {
     const Terms &x = terms[i];
     Link<R> &body = links[i];
-    const V3<R> t = widen(x.t), pole = widen(x.pole), arm = widen(x.arm);
+    const V3<R> pole = widen(x.pole), arm = widen(x.arm);
     const V3<R> parent_omega = widen(x.parent_omega), omega = widen(x.omega);
     const V3<R> half = widen(x.half), force = widen(x.force);
     const R m = widen(x.m), d = widen(x.d), k = widen(x.k);
@@ -177,26 +174,27 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
     body.bias_angular = cross(parent_omega, widen(x.relative_turn)) -
                         widen(x.rate_product) * cross(pole, body.s_theta);
     body.bias_linear = cross(parent_omega, cross(parent_omega, arm));
+    /* I^A and p^A: the rod's own, added to what its child hands it (zero at the tip). */
     const R transverse = m * d * d / 3.0;
-    M3<R> a = transverse * (identity - spinless * chain::outer(t, t));
-    M3<R> b{{{m * zero, m * half.z, m * -half.y},
-             {m * -half.z, m * zero, m * half.x},
-             {m * half.y, m * -half.x, m * zero}}};
-    M3<R> c{{{m, zero, zero}, {zero, m, zero}, {zero, zero, m}}};
+    M3<R> a = child_a, b = child_b, c = child_c;
+    a.c[0].x = a.c[0].x + transverse;
+    a.c[1].y = a.c[1].y + transverse;
+    a.c[2].z = a.c[2].z + transverse;
+    b.c[0].y = b.c[0].y + m * half.z;
+    b.c[0].z = b.c[0].z + m * -half.y;
+    b.c[1].x = b.c[1].x + m * -half.z;
+    b.c[1].z = b.c[1].z + m * half.x;
+    b.c[2].x = b.c[2].x + m * half.y;
+    b.c[2].y = b.c[2].y + m * -half.x;
+    c.c[0].x = c.c[0].x + m;
+    c.c[1].y = c.c[1].y + m;
+    c.c[2].z = c.c[2].z + m;
+    const V3<R> p_torque = child_torque - cross(half, force);
+    const V3<R> p_force = child_force + (m * cross(omega, cross(omega, half)) - force);
     const R gamma = damping * k; /* Kelvin–Voigt: γ = τ k */
     const R armature = implicit ? hd * gamma + hd * hd * k : zero;
-    V3<R> p_torque = -(spinless * transverse) * dot(t, omega) * cross(omega, t) -
-                     cross(half, force);
-    V3<R> p_force = m * cross(omega, cross(omega, half)) - force;
     const V2<R> hinge_torque = -k * widen(x.angles) -
                                (implicit ? gamma + hd * k : gamma) * widen(x.rates);
-    if (i + 1 < n) {
-      a = a + child_a;
-      b = b + child_b;
-      c = c + child_c;
-      p_torque = p_torque + child_torque;
-      p_force = p_force + child_force;
-    }
 
     const V3<R> axes[2] = {body.s_theta, body.s_phi};
     for (int j = 0; j < 2; j++) {
