@@ -116,12 +116,14 @@ StrandSolver::StrandSolver(const Span<int32_t> curve_offsets, const Span<vec3> r
       shortest_segment_ = std::min(shortest_segment_, rest_lengths_[size_t(i)]);
     }
   }
+  update_hinge_stiffness();
   reset();
 }
 
 void StrandSolver::set_params(const StrandParams &params)
 {
   params_ = params;
+  update_hinge_stiffness();
 }
 
 void StrandSolver::set_wind(const WindParams &wind)
@@ -384,28 +386,37 @@ ForceField::ForceField(const StrandParams &params, const float line_density,
   mass_per_length = c;
 }
 
+void StrandSolver::update_hinge_stiffness()
+{
+  /* The discrete bending energy ½ Σ EI κ² l with κ = angle / l at each hinge, l the length of
+   * strand the hinge stands for (its Voronoi length): k = EI(s) / l at arc length s. */
+  parallel_for(curves_num(), 256, [&](const IndexRange range) {
+    for (int64_t curve = range.start; curve < range.one_after_last(); curve++) {
+      const IndexRange points = curve_points(curve_offsets_, curve);
+      double length = 0.0;
+      for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+        length += rest_lengths_[size_t(i)];
+      }
+      double s = 0.0;
+      for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
+        const double d = rest_lengths_[size_t(i)];
+        const double voronoi = i == points.start + 1 ? 0.5 * d :
+                                                       0.5 * (d + rest_lengths_[size_t(i - 1)]);
+        hinge_stiffness_[size_t(i)] = float(params_.bending_stiffness_at(s, length) / voronoi);
+        s += d;
+      }
+    }
+  });
+}
+
 void StrandSolver::prepare_strand(const int64_t curve, const float h)
 {
-  const IndexRange points = curve_points(curve_offsets_, curve);
   if (params_.model == StrandModel::Articulated) {
-    /* The discrete bending energy ½ Σ EI κ² l with κ = angle / l at each hinge, l the length
-     * of strand the hinge stands for (its Voronoi length): k = EI(s) / l at arc length s. */
-    double length = 0.0;
-    for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
-      length += rest_lengths_[size_t(i)];
-    }
-    double s = 0.0;
-    for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
-      const double d = rest_lengths_[size_t(i)];
-      const double voronoi = i == points.start + 1 ? 0.5 * d :
-                                                     0.5 * (d + rest_lengths_[size_t(i - 1)]);
-      hinge_stiffness_[size_t(i)] = float(params_.bending_stiffness_at(s, length) / voronoi);
-      s += d;
-    }
-    return;
+    return; /* its hinge stiffnesses follow the params (update_hinge_stiffness) */
   }
   /* Kurihara 1993's hinges: the integrator's coefficients for this frame's h. (The sines and
    * cosines of the angles, trig_, are kept with the angles by everything that sets them.) */
+  const IndexRange points = curve_points(curve_offsets_, curve);
   const vec2 k(params_.k_theta, params_.k_phi);
   for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
     hinge_steps_[size_t(i)] = hinge_step(params_.integrator, moment_of_inertia(i), k,

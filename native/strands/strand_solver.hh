@@ -262,6 +262,8 @@ class StrandSolver {
   void place_at_rest(int64_t curve, const HeadPose &pose);
   /* Per-strand coefficients that stay fixed over one step of substeps of length h. */
   void prepare_strand(int64_t curve, float h);
+  /* The articulated model's hinge stiffnesses from the params and the rest lengths. */
+  void update_hinge_stiffness();
   /* Strand `curve`'s root and root frame (r_frame) carried by the head to the end of the
    * substep; returns the wind at the root. */
   vec3 place_root(int64_t curve, const Substep &substep, mat3 &r_frame);
@@ -380,7 +382,7 @@ class StrandSolver {
   std::vector<vec2> accelerations_, earlier_accelerations_;
   std::vector<uint8_t> accelerations_known_;
   std::vector<HingeStep<vec2>> hinge_steps_; /* the integrator's coefficients this frame */
-  std::vector<float> hinge_stiffness_;       /* articulated: k = EI / length, this frame */
+  std::vector<float> hinge_stiffness_;       /* articulated: k = EI / l (update_hinge_stiffness) */
   std::vector<vec4> trig_; /* (sin θ, cos θ, sin φ, cos φ) of the angles, within a step */
 
   /* Per point. */
