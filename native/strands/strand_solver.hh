@@ -382,7 +382,7 @@ class StrandSolver {
   std::vector<vec2> accelerations_, earlier_accelerations_;
   std::vector<uint8_t> accelerations_known_;
   std::vector<HingeStep<vec2>> hinge_steps_; /* the integrator's coefficients this frame */
-  std::vector<float> hinge_stiffness_;       /* articulated: k = EI / l (update_hinge_stiffness) */
+  std::vector<float> hinge_stiffness_; /* articulated: k = EI / l (update_hinge_stiffness) */
   std::vector<vec4> trig_; /* (sin θ, cos θ, sin φ, cos φ) of the angles, within a step */
 
   /* Per point. */
