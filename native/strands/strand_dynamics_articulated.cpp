@@ -13,9 +13,9 @@
  *   I_P = [ (m d²/3) 1   m [h]× ]      p = ( −h × F,
  *         [ −m [h]×      m 1    ]            m ω × (ω × h) − F )
  *
- * (Newton–Euler about P; F the external force at the centre, t the rod's direction). The
- * rod's inertia about P is m d²/3 about its own axis too (see tip_to_root), so it is
- * isotropic and has no gyroscopic torque ω × (I ω).
+ * (Newton–Euler about P; F the external force at the centre). The rod's inertia about P is
+ * m d²/3 about its own axis too (see tip_to_root), so it is isotropic and has no gyroscopic
+ * torque ω × (I ω).
  * Moving a reference point by r (motion at P_child = motion at P_parent shifted by r):
  * X = [1 0; −[r]× 1], inertia Xᵀ I X, force (τ + r × f, f) (Featherstone eq. 2.21, 2.24).
  *
@@ -410,10 +410,11 @@ template<int W>
     int outcomes[group_strands_max];
     for (int64_t first = 0; first < active_num; first += W) {
       const int64_t num = std::min<int64_t>(W, active_num - first);
-      articulated_step<W>(Span<int64_t>(step_curves + first, num), Span<Substep>(step_of + first, num),
-                       Span<uint8_t>(may_split + first, num), Span<mat3>(frames + first, num),
-                       Span<vec3>(step_winds + first, num), counts,
-                       MutableSpan<int>(outcomes + first, num));
+      articulated_step<W>(Span<int64_t>(step_curves + first, num),
+                          Span<Substep>(step_of + first, num),
+                          Span<uint8_t>(may_split + first, num), Span<mat3>(frames + first, num),
+                          Span<vec3>(step_winds + first, num), counts,
+                          MutableSpan<int>(outcomes + first, num));
     }
     int64_t kept = 0;
     for (int64_t j = 0; j < active_num; j++) {
