@@ -554,9 +554,22 @@ template<int W>
     const V3<Floats> tip_velocity = node_velocity + cross(omega, d * t) +
                                     shared.head_velocity.of_point(tip - head_center);
     V3<Floats> force = shared.forces.on_segment(d, center, center_velocity, wind, h);
+    /* The lanes' tips in one batched query (the same contacts as one by one; a batch holds
+     * a multiple of eight). */
+    ContactBatch<8> contacts;
+    if (colliders_ != nullptr) {
+      static_assert(W <= 8);
+      vec3 tips[W];
+      for (int lane = 0; lane < W; lane++) {
+        tips[lane] = get(tip, lane);
+      }
+      contacts.load(Span<vec3>(tips, W));
+      MapBatch<8> scratch;
+      colliders_->accumulate_contacts(contacts, scratch);
+    }
     for (int lane = 0; colliders_ != nullptr && lane < W; lane++) {
       Contact contact;
-      if (queried[lane] && colliders_->find_contact(get(tip, lane), contact)) {
+      if (queried[lane] && contacts.read(lane, contact)) {
         put(force, lane,
             contact_force(get(force, lane), d[lane], get(tip_velocity, lane), contact,
                           steps[lane].reaction));
