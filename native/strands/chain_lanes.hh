@@ -83,6 +83,11 @@ template<class R> HAIRDYN_CHAIN_INLINE auto get(const M2<R> &m, const int lane)
 {
   return glm::mat<2, 2, decltype(get(m.c[0].x, lane))>(get(m.c[0], lane), get(m.c[1], lane));
 }
+template<class R> HAIRDYN_CHAIN_INLINE auto get(const M3<R> &m, const int lane)
+{
+  return glm::mat<3, 3, decltype(get(m.c[0].x, lane))>(get(m.c[0], lane), get(m.c[1], lane),
+                                                       get(m.c[2], lane));
+}
 
 /* Single-precision lanes F with one value for every lane (a glm scalar, vector or matrix):
  * the same operations as glm's on each lane. */

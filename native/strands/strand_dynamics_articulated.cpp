@@ -262,10 +262,12 @@ template<class R> HAIRDYN_CHAIN_INLINE void root_to_tip(Link<R> *links, const si
  * (advance_articulated_as), every lane's bits the same on all (chain_lanes.hh). */
 std::atomic<VectorCode> vector_code{cpu_vector_code()};
 
-/* A step's scratch for W lanes: the mid-step rates' q̈ per lane, pass 1's bodies and the
- * recursion's links. */
+/* A step's scratch for W lanes: per lane the mid-step rates' q̈, the step's q̈ and the
+ * projected segments (body, outward normal); pass 1's bodies and the recursion's links. */
 template<int W> struct LaneScratch {
   std::vector<vec2> mid_accelerations[W];
+  std::vector<vec2> accelerations[W];
+  std::vector<std::pair<size_t, vec3>> stops[W];
   std::vector<StrandSolver::ArticulatedTerms<W>> terms;
   std::vector<Link<Lanes<W>>> links;
 };
@@ -274,9 +276,6 @@ template<int W> LaneScratch<W> &lane_scratch()
   thread_local LaneScratch<W> scratch;
   return scratch;
 }
-/* A strand's q̈ and its projected segments (body, outward normal). */
-thread_local std::vector<vec2> accelerations;
-thread_local std::vector<std::pair<size_t, vec3>> stops;
 
 
 inline rvec3 real(const vec3 &v)
@@ -473,8 +472,9 @@ template<int W>
   }
 }
 
-/* GCC 12 reports the lanes filled one by one below (each zero-initialised first) as maybe
- * uninitialised: a false positive of its vector element insertion. */
+/* GCC 12 reports the lanes filled one by one below, in pass 1 and the commit (each
+ * zero-initialised first), as maybe uninitialised: a false positive of its vector element
+ * insertion. */
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 template<int W>
@@ -601,85 +601,160 @@ template<int W>
     r_fastest_turn[lane] = fastest_turn[lane];
   }
 }
-#pragma GCC diagnostic pop
 
-[[gnu::always_inline]] inline bool StrandSolver::articulated_commit(
-    const int64_t curve, const Substep &substep, const mat3 &root_frame,
-    const Span<vec2> step_accelerations)
+template<int W>
+[[gnu::always_inline]] inline void StrandSolver::articulated_commit(
+    const Span<int64_t> curves, const Span<Substep> steps, const Span<mat3> root_frames,
+    const uint8_t *committed, const MutableSpan<int> r_outcomes)
 {
-  const IndexRange points = curve_points(curve_offsets_, curve);
-  const float h = substep.h;
-  const float inv_h = 1.0f / h;
-  const size_t first = size_t(points.start) + 1;
-  const size_t end = size_t(points.one_after_last());
-  /* q̇ += h q̈, q += h q̇ (semi-implicit Euler; the springs already implicit through D). */
-  for (size_t i = first; i < end; i++) {
-    const vec2 q_acceleration = step_accelerations[int64_t(i - first)];
-    earlier_accelerations_[i] = accelerations_[i];
-    accelerations_[i] = q_acceleration;
-    vec2 &omega = angular_velocities_[i];
-    omega += h * q_acceleration;
-    if (!(std::abs(omega.x) + std::abs(omega.y) < runaway_speed / rest_lengths_[i])) {
-      return false; /* Runaway or not a number: caught before it reaches a collider. */
+  using Floats = chain::Floats<W>;
+  LaneScratch<W> &scratch = lane_scratch<W>();
+  const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
+  size_t first[W];
+  bool lanes[W]; /* the lanes that commit and have not run away */
+  for (int lane = 0; lane < W; lane++) {
+    first[lane] = size_t(curve_offsets_[size_t(curves[lane])]) + 1;
+    lanes[lane] = committed[lane];
+    scratch.stops[lane].clear();
+    if (!lanes[lane]) {
+      continue;
     }
-    angles_[i] += h * omega;
+    /* q̇ += h q̈, q += h q̇ (semi-implicit Euler; the springs already implicit through D). */
+    const float h = steps[lane].h;
+    for (size_t i = 0; i < n; i++) {
+      const size_t p = first[lane] + i;
+      const vec2 q_acceleration = scratch.accelerations[lane][i];
+      earlier_accelerations_[p] = accelerations_[p];
+      accelerations_[p] = q_acceleration;
+      vec2 &omega = angular_velocities_[p];
+      omega += h * q_acceleration;
+      if (!(std::abs(omega.x) + std::abs(omega.y) < runaway_speed / rest_lengths_[p])) {
+        /* Runaway or not a number: caught before it reaches a collider. */
+        r_outcomes[lane] = -1;
+        lanes[lane] = false;
+        break;
+      }
+      angles_[p] += h * omega;
+    }
+    if (!lanes[lane]) {
+      continue;
+    }
+    uint8_t &known = accelerations_known_[size_t(curves[lane])];
+    known = uint8_t(std::min(known + 1, 2));
+    /* The new angles' sines and cosines. */
+    for (size_t i = 0; i < n; i++) {
+      trig_[first[lane] + i] = Deflection(angles_[first[lane] + i]).trig();
+    }
   }
-  /* The new angles' sines and cosines, all in one loop (the shape's loop below then calls
-   * nothing where no collider is, and keeps its frames in registers). */
-  for (size_t i = first; i < end; i++) {
-    trig_[i] = Deflection(angles_[i]).trig();
-  }
-  uint8_t &known = accelerations_known_[size_t(curve)];
-  known = uint8_t(std::min(known + 1, 2));
 
-  /* The new shape, root to tip, with the no-penetration projection (Ward & Lin 2003 §5.5);
-   * the caller then applies the impulses that stop the projected tips' motion into the
-   * surfaces (`stops`). */
-  stops.clear();
-  mat3 frame = root_frame;
-  vec3 node = positions_wo_[size_t(points.start)];
-  /* A projected segment turns alone: its child keeps the direction it had (its hinge takes
+  /* The new shapes, root to tip, W at once, every operation glm's on each lane; then each
+   * lane's no-penetration projection (Ward & Lin 2003 §5.5) on its own, the lanes' tips
+   * queried in one batch. The caller applies the impulses that stop the projected tips'
+   * motion into the surfaces (scratch.stops).
+   *
+   * A projected segment turns alone: its child keeps the direction it had (its hinge takes
    * the turn back), so the strand beyond moves by the tip's small displacement instead of
    * swinging about the projected segment's root. Swinging it, a strand lying on the head
    * flicked its tip by millimetres at every projection and never came to rest. */
-  bool keep_direction = false;
-  vec3 kept_direction(0.0f);
-  for (size_t i = first; i < end; i++) {
-    const float d = rest_lengths_[i];
-    const mat3 chart = frame * rest_rotations_[i];
-    Deflection deflection = keep_direction ?
-                                chart_deflection(chart, kept_direction, angles_[i]) :
-                                Deflection(trig_[i]);
-    keep_direction = false;
-    frame = deflection.rotate(chart);
-    vec3 tip = node + d * frame[2];
-    const vec2 rate = angular_velocities_[i];
-    vec3 normal;
-    const mat3 unprojected = frame;
-    if (colliders_ != nullptr &&
-        project_segment(substep, node, tip, d, chart, angles_[i], angular_velocities_[i],
-                        &normal))
-    {
-      angular_velocities_[i] = rate; /* the impulse stops it */
-      stops.emplace_back(i - first, normal);
-      deflection = Deflection(angles_[i]);
-      frame = deflection.rotate(chart);
-      tip = node + d * frame[2];
-      if (i + 1 < end) {
-        keep_direction = true;
-        kept_direction = Deflection(trig_[i + 1]).rotate(unprojected * rest_rotations_[i + 1])[2];
+  M3<Floats> frame{};
+  V3<Floats> node{};
+  for (int lane = 0; lane < W; lane++) {
+    for (int j = 0; j < 3; j++) {
+      put(frame.c[j], lane, root_frames[lane][j]);
+    }
+    put(node, lane, positions_wo_[first[lane] - 1]);
+  }
+  bool keep_direction[W] = {};
+  vec3 kept_direction[W];
+  for (size_t i = 0; i < n; i++) {
+    M3<Floats> rest{};
+    Floats trig[4]{}, d{};
+    for (int lane = 0; lane < W; lane++) {
+      const size_t p = first[lane] + i;
+      for (int j = 0; j < 3; j++) {
+        put(rest.c[j], lane, rest_rotations_[p][j]);
+      }
+      for (int j = 0; j < 4; j++) {
+        trig[j][lane] = trig_[p][j];
+      }
+      d[lane] = rest_lengths_[p];
+    }
+    const M3<Floats> chart{{frame * rest.c[0], frame * rest.c[1], frame * rest.c[2]}};
+    for (int lane = 0; lane < W; lane++) {
+      if (keep_direction[lane]) {
+        keep_direction[lane] = false;
+        const vec4 kept = chart_deflection(get(chart, lane), kept_direction[lane],
+                                           angles_[first[lane] + i])
+                              .trig();
+        for (int j = 0; j < 4; j++) {
+          trig[j][lane] = kept[j];
+        }
       }
     }
-    trig_[i] = deflection.trig();
-    velocities_wo_[i] = (tip - positions_wo_[i]) * inv_h;
-    positions_wo_[i] = tip;
+    const M3<Floats> unprojected = [&]() HAIRDYN_CHAIN_INLINE_LAMBDA {
+      M3<Floats> r;
+      rotate_chart(trig[0], trig[1], trig[2], trig[3], chart.c, r.c);
+      return r;
+    }();
+    frame = unprojected;
+    V3<Floats> tip = node + d * frame.c[2];
+    ContactBatch<8> contacts;
+    if (colliders_ != nullptr) {
+      static_assert(W <= 8);
+      vec3 tips[W];
+      for (int lane = 0; lane < W; lane++) {
+        tips[lane] = get(tip, lane);
+      }
+      contacts.load(Span<vec3>(tips, W));
+      MapBatch<8> batch_scratch;
+      colliders_->accumulate_contacts(contacts, batch_scratch);
+    }
+    for (int lane = 0; lane < W; lane++) {
+      if (!lanes[lane]) {
+        continue;
+      }
+      const size_t p = first[lane] + i;
+      Deflection deflection(vec4(trig[0][lane], trig[1][lane], trig[2][lane], trig[3][lane]));
+      vec3 lane_tip = get(tip, lane);
+      const vec2 rate = angular_velocities_[p];
+      vec3 normal;
+      std::pair<bool, Contact> tip_contact;
+      if (colliders_ != nullptr) {
+        tip_contact.first = contacts.read(lane, tip_contact.second);
+      }
+      if (tip_contact.first &&
+          project_segment(steps[lane], get(node, lane), lane_tip, d[lane], get(chart, lane),
+                          angles_[p], angular_velocities_[p], &normal, &tip_contact))
+      {
+        angular_velocities_[p] = rate; /* the impulse stops it */
+        scratch.stops[lane].emplace_back(i, normal);
+        deflection = Deflection(angles_[p]);
+        const mat3 projected = deflection.rotate(get(chart, lane));
+        lane_tip = get(node, lane) + d[lane] * projected[2];
+        for (int j = 0; j < 3; j++) {
+          put(frame.c[j], lane, projected[j]);
+        }
+        put(tip, lane, lane_tip);
+        if (i + 1 < n) {
+          keep_direction[lane] = true;
+          kept_direction[lane] = Deflection(trig_[p + 1])
+                                     .rotate(get(unprojected, lane) * rest_rotations_[p + 1])[2];
+        }
+      }
+      trig_[p] = deflection.trig();
+      velocities_wo_[p] = (lane_tip - positions_wo_[p]) * (1.0f / steps[lane].h);
+      positions_wo_[p] = lane_tip;
+    }
     node = tip;
   }
-  if (!stops.empty()) {
-    known = 0; /* the impulses change the rates at once: no trend to extrapolate */
+  for (int lane = 0; lane < W; lane++) {
+    if (lanes[lane] && !scratch.stops[lane].empty()) {
+      /* the impulses change the rates at once: no trend to extrapolate */
+      accelerations_known_[size_t(curves[lane])] = 0;
+    }
   }
-  return true;
 }
+#pragma GCC diagnostic pop
 
 template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_step(
@@ -696,7 +771,6 @@ template<int W>
   std::vector<ArticulatedTerms<W>> &lane_terms = scratch.terms;
   lane_links.resize(n);
   lane_terms.resize(n);
-  accelerations.resize(n);
   /* Every lane holds a strand: those past the group's repeat its first (their results are
    * dropped). */
   int64_t lane_curves[W];
@@ -777,25 +851,32 @@ template<int W>
     }
   }
   stage(queried);
+  /* The strands that take the step commit it (a strand that cuts it is left unchanged). */
+  uint8_t committed[W] = {};
   for (int lane = 0; lane < lanes_num; lane++) {
     if (!predict[lane] && r_outcomes[lane] == 1) {
       r_outcomes[lane] = steps_needed(lane, fastest_turn[lane]);
     }
     if (r_outcomes[lane] > 1) {
-      continue; /* unchanged: the caller cuts its step */
-    }
-    const int64_t curve = curves[lane];
-    const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
-    counts.contacts += lane_counts[lane].contacts;
-    for (size_t i = 0; i < n; i++) {
-      accelerations[i] = vec2(get(lane_links[i].acceleration, lane));
-    }
-    if (!articulated_commit(curve, steps[lane], root_frames[lane], accelerations)) {
-      r_outcomes[lane] = -1;
       continue;
     }
-    counts.projections += int64_t(stops.size());
-    for (const auto &[body, normal] : stops) {
+    committed[lane] = 1;
+    counts.contacts += lane_counts[lane].contacts;
+    scratch.accelerations[lane].resize(n);
+    for (size_t i = 0; i < n; i++) {
+      scratch.accelerations[lane][i] = vec2(get(lane_links[i].acceleration, lane));
+    }
+  }
+  articulated_commit<W>(Span<int64_t>(lane_curves, W), Span<Substep>(lane_steps, W),
+                        Span<mat3>(lane_frames, W), committed,
+                        MutableSpan<int>(r_outcomes.data(), lanes_num));
+  for (int lane = 0; lane < lanes_num; lane++) {
+    if (!committed[lane] || r_outcomes[lane] < 0) {
+      continue;
+    }
+    const size_t first = size_t(curve_offsets_[size_t(curves[lane])]) + 1;
+    counts.projections += int64_t(scratch.stops[lane].size());
+    for (const auto &[body, normal] : scratch.stops[lane]) {
       stop_at_contact(lane_links.data(), lane_terms.data(), lane, n, body, real(normal),
                       MutableSpan<vec2>(angular_velocities_).slice(int64_t(first), int64_t(n)));
     }

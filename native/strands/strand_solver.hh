@@ -320,11 +320,14 @@ class StrandSolver {
                            Span<vec3> winds, Span<const vec2 *> mid_accelerations,
                            Span<uint8_t> queried, ArticulatedTerms<W> *terms,
                            float *r_fastest_turn, Counts *r_counts) const;
-  /* The step's hinge accelerations into rates and angles, then the new shape with the
-   * no-penetration projection; the projected segments are left in a list whose impulses the
-   * caller applies. False when the strand ran away. */
-  bool articulated_commit(int64_t curve, const Substep &substep, const mat3 &root_frame,
-                          Span<vec2> step_accelerations);
+  /* For the lanes `committed` of W strands (a lane may repeat another's strand), the step's
+   * hinge accelerations (the lane scratch's) into rates and angles, then the new shapes, W at
+   * once, with each lane's no-penetration projection; each lane's projected segments are left
+   * in a list whose impulses the caller applies. r_outcomes[lane] = -1 where the strand ran
+   * away. */
+  template<int W>
+  void articulated_commit(Span<int64_t> curves, Span<Substep> steps, Span<mat3> root_frames,
+                          const uint8_t *committed, MutableSpan<int> r_outcomes);
   /* Each pin of the strand to its rest position carried by the head at the end of the
    * substep, the chain before it reaching it (groom/pins.hh), positions and velocities only:
    * take_back_strand turns them into angles and rates. */
@@ -353,10 +356,11 @@ class StrandSolver {
   /* Ward & Lin 2003 §5.5: when the segment from `node` (chart `chart`, angles `angles`) ends
    * at `tip` deeper than the tolerance inside a collider, it turns about `node` onto the
    * surface and stops turning. Returns true when it moved; r_normal, if given, receives the
-   * outward normal of the surface it was turned onto. */
+   * outward normal of the surface it was turned onto. `tip_contact`, if given, is the contact
+   * query's answer at `tip` (whether it is inside, and the contact), found by the caller. */
   bool project_segment(const Substep &substep, const vec3 &node, vec3 tip, float d,
-                       const mat3 &chart, vec2 &angles, vec2 &omega,
-                       vec3 *r_normal = nullptr) const;
+                       const mat3 &chart, vec2 &angles, vec2 &omega, vec3 *r_normal = nullptr,
+                       const std::pair<bool, Contact> *tip_contact = nullptr) const;
 
   StrandParams params_;
   glm::dvec3 origin_wo_;
