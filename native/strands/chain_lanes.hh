@@ -10,6 +10,7 @@
  * lane of a vector as alone, whatever the instruction set the vector code was compiled for
  * (test StrandsCollision.LanesGiveEachStrandItsOwnBits). */
 #include <cmath>
+#include <cstring>
 
 #include "core/math.hh"
 
@@ -87,6 +88,57 @@ template<class R> HAIRDYN_CHAIN_INLINE auto get(const M3<R> &m, const int lane)
 {
   return glm::mat<3, 3, decltype(get(m.c[0].x, lane))>(get(m.c[0], lane), get(m.c[1], lane),
                                                        get(m.c[2], lane));
+}
+
+/* Records of W lanes, one pointer per lane, as lane vectors: out[j][lane] = records[lane][j]
+ * (what putting them lane by lane gives, bit for bit), loaded four or two floats at a time
+ * and transposed, for records of four floats (a vec4, or four consecutive floats of a larger
+ * record) and of two (a vec2). W is 4 or 8. */
+HAIRDYN_CHAIN_INLINE void gather4(const float *const *records, Floats<4> *out)
+{
+  using F4 = Floats<4>;
+  F4 r[4];
+  for (int lane = 0; lane < 4; lane++) {
+    std::memcpy(&r[lane], records[lane], sizeof(F4));
+  }
+  const F4 t0 = __builtin_shufflevector(r[0], r[1], 0, 4, 1, 5);
+  const F4 t1 = __builtin_shufflevector(r[0], r[1], 2, 6, 3, 7);
+  const F4 t2 = __builtin_shufflevector(r[2], r[3], 0, 4, 1, 5);
+  const F4 t3 = __builtin_shufflevector(r[2], r[3], 2, 6, 3, 7);
+  out[0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+  out[1] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+  out[2] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+  out[3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+}
+HAIRDYN_CHAIN_INLINE void gather4(const float *const *records, Floats<8> *out)
+{
+  Floats<4> low[4], high[4];
+  gather4(records, low);
+  gather4(records + 4, high);
+  for (int j = 0; j < 4; j++) {
+    out[j] = __builtin_shufflevector(low[j], high[j], 0, 1, 2, 3, 4, 5, 6, 7);
+  }
+}
+HAIRDYN_CHAIN_INLINE void gather2(const float *const *records, V2<Floats<4>> &out)
+{
+  using F4 = Floats<4>;
+  F4 r[2];
+  for (int pair = 0; pair < 2; pair++) {
+    float both[4];
+    std::memcpy(both, records[2 * pair], 2 * sizeof(float));
+    std::memcpy(both + 2, records[2 * pair + 1], 2 * sizeof(float));
+    std::memcpy(&r[pair], both, sizeof(F4));
+  }
+  out.x = __builtin_shufflevector(r[0], r[1], 0, 2, 4, 6);
+  out.y = __builtin_shufflevector(r[0], r[1], 1, 3, 5, 7);
+}
+HAIRDYN_CHAIN_INLINE void gather2(const float *const *records, V2<Floats<8>> &out)
+{
+  V2<Floats<4>> low, high;
+  gather2(records, low);
+  gather2(records + 4, high);
+  out.x = __builtin_shufflevector(low.x, high.x, 0, 1, 2, 3, 4, 5, 6, 7);
+  out.y = __builtin_shufflevector(low.y, high.y, 0, 1, 2, 3, 4, 5, 6, 7);
 }
 
 /* Single-precision lanes F with one value for every lane (a glm scalar, vector or matrix):

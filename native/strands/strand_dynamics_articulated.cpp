@@ -352,6 +352,38 @@ void stop_at_contact(const Link<R> *chain, const Terms *terms, const int lane, c
   }
 }
 
+/* The rest rotation, the sines and cosines of the angles and the length of segment
+ * points[lane] of W strands, one lane each (from StrandSolver's rest_rotations_, trig_ and
+ * rest_lengths_). */
+template<int W>
+HAIRDYN_CHAIN_INLINE void load_segment_lanes(const size_t *points, const mat3 *rest_rotations,
+                                             const vec4 *trigs, const float *rest_lengths,
+                                             M3<chain::Floats<W>> &r_rest,
+                                             chain::Floats<W> *r_trig,
+                                             chain::Floats<W> &r_length)
+{
+  /* A mat3 is nine consecutive floats, column by column (c0.xyz c1.xyz c2.xyz). */
+  const float *head[W], *middle[W], *trig[W];
+  for (int lane = 0; lane < W; lane++) {
+    const float *rest = &rest_rotations[points[lane]][0][0];
+    head[lane] = rest;
+    middle[lane] = rest + 4;
+    trig[lane] = &trigs[points[lane]][0];
+    r_rest.c[2].z[lane] = rest[8];
+    r_length[lane] = rest_lengths[points[lane]];
+  }
+  chain::Floats<W> part[4];
+  chain::gather4(head, part);
+  r_rest.c[0] = {part[0], part[1], part[2]};
+  r_rest.c[1].x = part[3];
+  chain::gather4(middle, part);
+  r_rest.c[1].y = part[0];
+  r_rest.c[1].z = part[1];
+  r_rest.c[2].x = part[2];
+  r_rest.c[2].y = part[3];
+  chain::gather4(trig, r_trig);
+}
+
 }  // namespace
 
 template<int W>
@@ -516,23 +548,24 @@ template<int W>
   V3<Floats> arm{};
   Floats fastest_turn{}; /* rad/s, of a segment or across a hinge */
   for (size_t i = 0; i < n; i++) {
-    M3<Floats> rest{};
-    Floats trig[4]{}, d{}, k{};
-    V2<Floats> rates{}, mid{}, angles{};
+    size_t points[W];
+    const float *rate_records[W], *mid_records[W], *angle_records[W];
+    Floats k{};
     for (int lane = 0; lane < W; lane++) {
-      const size_t p = first[lane] + i;
-      for (int j = 0; j < 3; j++) {
-        put(rest.c[j], lane, rest_rotations_[p][j]);
-      }
-      for (int j = 0; j < 4; j++) {
-        trig[j][lane] = trig_[p][j];
-      }
-      d[lane] = rest_lengths_[p];
-      k[lane] = hinge_stiffness_[p];
-      put(rates, lane, angular_velocities_[p]);
-      put(mid, lane, mid_accelerations[lane][i]);
-      put(angles, lane, angles_[p]);
+      points[lane] = first[lane] + i;
+      k[lane] = hinge_stiffness_[points[lane]];
+      rate_records[lane] = &angular_velocities_[points[lane]].x;
+      mid_records[lane] = &mid_accelerations[lane][i].x;
+      angle_records[lane] = &angles_[points[lane]].x;
     }
+    M3<Floats> rest;
+    Floats trig[4], d;
+    load_segment_lanes<W>(points, rest_rotations_.data(), trig_.data(), rest_lengths_.data(),
+                          rest, trig, d);
+    V2<Floats> rates, mid, angles;
+    chain::gather2(rate_records, rates);
+    chain::gather2(mid_records, mid);
+    chain::gather2(angle_records, angles);
     const Floats m = density * d;
     const M3<Floats> chart{{frame * rest.c[0], frame * rest.c[1], frame * rest.c[2]}};
     rotate_chart(trig[0], trig[1], trig[2], trig[3], chart.c, frame.c);
@@ -667,18 +700,14 @@ template<int W>
   bool keep_direction[W] = {};
   vec3 kept_direction[W];
   for (size_t i = 0; i < n; i++) {
-    M3<Floats> rest{};
-    Floats trig[4]{}, d{};
+    size_t points[W];
     for (int lane = 0; lane < W; lane++) {
-      const size_t p = first[lane] + i;
-      for (int j = 0; j < 3; j++) {
-        put(rest.c[j], lane, rest_rotations_[p][j]);
-      }
-      for (int j = 0; j < 4; j++) {
-        trig[j][lane] = trig_[p][j];
-      }
-      d[lane] = rest_lengths_[p];
+      points[lane] = first[lane] + i;
     }
+    M3<Floats> rest;
+    Floats trig[4], d;
+    load_segment_lanes<W>(points, rest_rotations_.data(), trig_.data(), rest_lengths_.data(),
+                          rest, trig, d);
     const M3<Floats> chart{{frame * rest.c[0], frame * rest.c[1], frame * rest.c[2]}};
     for (int lane = 0; lane < W; lane++) {
       if (keep_direction[lane]) {
