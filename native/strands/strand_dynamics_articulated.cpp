@@ -384,6 +384,26 @@ HAIRDYN_CHAIN_INLINE void load_segment_lanes(const size_t *points, const mat3 *r
   chain::gather4(trig, r_trig);
 }
 
+/* The contacts of W lanes' points in one batched query (the same contacts as one by one; a
+ * batch holds a multiple of eight), or none without colliders. */
+template<class F>
+HAIRDYN_CHAIN_INLINE void find_lane_contacts(const ColliderSet *colliders, const V3<F> &points,
+                                             ContactBatch<8> &r_contacts)
+{
+  if (colliders == nullptr) {
+    return;
+  }
+  constexpr int lanes = int(sizeof(F) / sizeof(float));
+  static_assert(lanes <= 8);
+  vec3 each[lanes];
+  for (int lane = 0; lane < lanes; lane++) {
+    each[lane] = get(points, lane);
+  }
+  r_contacts.load(Span<vec3>(each, lanes));
+  MapBatch<8> scratch;
+  colliders->accumulate_contacts(r_contacts, scratch);
+}
+
 }  // namespace
 
 template<int W>
@@ -587,19 +607,8 @@ template<int W>
     const V3<Floats> tip_velocity = node_velocity + cross(omega, d * t) +
                                     shared.head_velocity.of_point(tip - head_center);
     V3<Floats> force = shared.forces.on_segment(d, center, center_velocity, wind, h);
-    /* The lanes' tips in one batched query (the same contacts as one by one; a batch holds
-     * a multiple of eight). */
     ContactBatch<8> contacts;
-    if (colliders_ != nullptr) {
-      static_assert(W <= 8);
-      vec3 tips[W];
-      for (int lane = 0; lane < W; lane++) {
-        tips[lane] = get(tip, lane);
-      }
-      contacts.load(Span<vec3>(tips, W));
-      MapBatch<8> scratch;
-      colliders_->accumulate_contacts(contacts, scratch);
-    }
+    find_lane_contacts(colliders_, tip, contacts);
     for (int lane = 0; colliders_ != nullptr && lane < W; lane++) {
       Contact contact;
       if (queried[lane] && contacts.read(lane, contact)) {
@@ -720,24 +729,11 @@ template<int W>
         }
       }
     }
-    const M3<Floats> unprojected = [&]() HAIRDYN_CHAIN_INLINE_LAMBDA {
-      M3<Floats> r;
-      rotate_chart(trig[0], trig[1], trig[2], trig[3], chart.c, r.c);
-      return r;
-    }();
-    frame = unprojected;
+    rotate_chart(trig[0], trig[1], trig[2], trig[3], chart.c, frame.c);
+    const M3<Floats> unprojected = frame;
     V3<Floats> tip = node + d * frame.c[2];
     ContactBatch<8> contacts;
-    if (colliders_ != nullptr) {
-      static_assert(W <= 8);
-      vec3 tips[W];
-      for (int lane = 0; lane < W; lane++) {
-        tips[lane] = get(tip, lane);
-      }
-      contacts.load(Span<vec3>(tips, W));
-      MapBatch<8> batch_scratch;
-      colliders_->accumulate_contacts(contacts, batch_scratch);
-    }
+    find_lane_contacts(colliders_, tip, contacts);
     for (int lane = 0; lane < W; lane++) {
       if (!lanes[lane]) {
         continue;
