@@ -10,6 +10,7 @@
  * lane of a vector as alone, whatever the instruction set the vector code was compiled for
  * (test StrandsCollision.LanesGiveEachStrandItsOwnBits). */
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 
 #include "core/math.hh"
@@ -27,9 +28,11 @@ namespace hairdyn::chain {
 template<int W> struct LaneTypes {
   typedef double Lanes __attribute__((vector_size(W * sizeof(double))));
   typedef float Floats __attribute__((vector_size(W * sizeof(float))));
+  typedef int32_t Ints __attribute__((vector_size(W * sizeof(int32_t))));
 };
 template<int W> using Lanes = typename LaneTypes<W>::Lanes;
 template<int W> using Floats = typename LaneTypes<W>::Floats;
+template<int W> using Ints = typename LaneTypes<W>::Ints; /* as many int32_t lanes */
 constexpr int max_lane_width = 8;
 /* What memory the vector code reads must be aligned to: GCC gives a vector only 16-byte
  * alignment where AVX is off (and drops an alignment attribute on a template argument),

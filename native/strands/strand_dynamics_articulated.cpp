@@ -683,8 +683,25 @@ template<int W>
     }
     uint8_t &known = accelerations_known_[size_t(curves[lane])];
     known = uint8_t(std::min(known + 1, 2));
-    /* The new angles' sines and cosines. */
-    for (size_t i = 0; i < n; i++) {
+    /* The new angles' sines and cosines, W segments at a time (the same bits as one by one:
+     * sin_cos). */
+    size_t i = 0;
+    for (; i + W <= n; i += W) {
+      const float *angles[W];
+      for (int j = 0; j < W; j++) {
+        angles[j] = &angles_[first[lane] + i + size_t(j)].x;
+      }
+      V2<Floats> q;
+      chain::gather2(angles, q);
+      Floats sin_theta, cos_theta, sin_phi, cos_phi;
+      sin_cos<Floats, chain::Ints<W>>(q.x, sin_theta, cos_theta);
+      sin_cos<Floats, chain::Ints<W>>(q.y, sin_phi, cos_phi);
+      for (int j = 0; j < W; j++) {
+        trig_[first[lane] + i + size_t(j)] = vec4(sin_theta[j], cos_theta[j], sin_phi[j],
+                                                  cos_phi[j]);
+      }
+    }
+    for (; i < n; i++) {
       trig_[first[lane] + i] = Deflection(angles_[first[lane] + i]).trig();
     }
   }
