@@ -262,11 +262,10 @@ template<class R> HAIRDYN_CHAIN_INLINE void root_to_tip(Link<R> *links, const si
  * (advance_articulated_as), every lane's bits the same on all (chain_lanes.hh). */
 std::atomic<VectorCode> vector_code{cpu_vector_code()};
 
-/* A step's scratch for W lanes: per lane the mid-step rates' q̈, the step's q̈ and the
- * projected segments (body, outward normal); pass 1's bodies and the recursion's links. */
+/* A step's scratch for W lanes: per lane the mid-step rates' q̈ and the projected segments
+ * (body, outward normal); pass 1's bodies and the recursion's links (with the step's q̈). */
 template<int W> struct LaneScratch {
   std::vector<vec2> mid_accelerations[W];
-  std::vector<vec2> accelerations[W];
   std::vector<std::pair<size_t, vec3>> stops[W];
   std::vector<StrandSolver::ArticulatedTerms<W>> terms;
   std::vector<Link<Lanes<W>>> links;
@@ -665,7 +664,7 @@ template<int W>
     const float h = steps[lane].h;
     for (size_t i = 0; i < n; i++) {
       const size_t p = first[lane] + i;
-      const vec2 q_acceleration = scratch.accelerations[lane][i];
+      const vec2 q_acceleration = vec2(get(scratch.links[i].acceleration, lane));
       earlier_accelerations_[p] = accelerations_[p];
       accelerations_[p] = q_acceleration;
       vec2 &omega = angular_velocities_[p];
@@ -760,13 +759,10 @@ template<int W>
       vec3 lane_tip = get(tip, lane);
       const vec2 rate = angular_velocities_[p];
       vec3 normal;
-      std::pair<bool, Contact> tip_contact;
-      if (colliders_ != nullptr) {
-        tip_contact.first = contacts.read(lane, tip_contact.second);
-      }
-      if (tip_contact.first &&
+      Contact contact;
+      if (colliders_ != nullptr && contacts.read(lane, contact) &&
           project_segment(steps[lane], get(node, lane), lane_tip, d[lane], get(chart, lane),
-                          angles_[p], angular_velocities_[p], &normal, &tip_contact))
+                          angles_[p], angular_velocities_[p], &normal, &contact))
       {
         angular_velocities_[p] = rate; /* the impulse stops it */
         scratch.stops[lane].emplace_back(i, normal);
@@ -904,10 +900,6 @@ template<int W>
     }
     committed[lane] = 1;
     counts.contacts += lane_counts[lane].contacts;
-    scratch.accelerations[lane].resize(n);
-    for (size_t i = 0; i < n; i++) {
-      scratch.accelerations[lane][i] = vec2(get(lane_links[i].acceleration, lane));
-    }
   }
   articulated_commit<W>(Span<int64_t>(lane_curves, W), Span<Substep>(lane_steps, W),
                         Span<mat3>(lane_frames, W), committed,

@@ -450,7 +450,7 @@ vec3 StrandSolver::contact_force(const vec3 &force, const float d, const vec3 &t
 bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec3 tip,
                                    const float d, const mat3 &chart, vec2 &angles,
                                    vec2 &omega, vec3 *r_normal,
-                                   const std::pair<bool, Contact> *tip_contact) const
+                                   const Contact *contact_at_tip) const
 {
   if (colliders_ == nullptr) {
     return false;
@@ -462,13 +462,12 @@ bool StrandSolver::project_segment(const Substep &substep, const vec3 &node, vec
   bool moved = false;
   Contact contact;
   for (int attempt = 0; attempt < max_projection_attempts; attempt++) {
-    const bool inside = attempt == 0 && tip_contact != nullptr ?
-                            tip_contact->first :
-                            colliders_->find_contact(tip, contact);
-    if (attempt == 0 && tip_contact != nullptr) {
-      contact = tip_contact->second;
+    const bool known = attempt == 0 && contact_at_tip != nullptr;
+    if (known) {
+      contact = *contact_at_tip;
     }
-    if (!inside || contact.depth <= substep.projection_tolerance_wo) {
+    if (!(known || colliders_->find_contact(tip, contact)) ||
+        contact.depth <= substep.projection_tolerance_wo) {
       break;
     }
     if (glm::dot(node - contact.surface_point_wo, contact.normal_wo) <= -d) {

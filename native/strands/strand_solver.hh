@@ -99,7 +99,7 @@ struct Substep {
   ForceField forces;
 };
 
-/* The vector code the articulated model's recursion runs: by default the widest the CPU has.
+/* The vector code the articulated model's step runs: by default the widest the CPU has.
  * A narrower one may be set (a wider one is clamped to the CPU's), for the test that all give
  * the same bits; not to be changed while a step runs. */
 VectorCode articulated_vector_code();
@@ -321,7 +321,7 @@ class StrandSolver {
                            Span<uint8_t> queried, ArticulatedTerms<W> *terms,
                            float *r_fastest_turn, Counts *r_counts) const;
   /* For the lanes `committed` of W strands (a lane may repeat another's strand), the step's
-   * hinge accelerations (the lane scratch's) into rates and angles, then the new shapes, W at
+   * hinge accelerations (the recursion's, in the lane scratch) into rates and angles, then the new shapes, W at
    * once, with each lane's no-penetration projection; each lane's projected segments are left
    * in a list whose impulses the caller applies. r_outcomes[lane] = -1 where the strand ran
    * away. */
@@ -356,11 +356,11 @@ class StrandSolver {
   /* Ward & Lin 2003 §5.5: when the segment from `node` (chart `chart`, angles `angles`) ends
    * at `tip` deeper than the tolerance inside a collider, it turns about `node` onto the
    * surface and stops turning. Returns true when it moved; r_normal, if given, receives the
-   * outward normal of the surface it was turned onto. `tip_contact`, if given, is the contact
-   * query's answer at `tip` (whether it is inside, and the contact), found by the caller. */
+   * outward normal of the surface it was turned onto. `contact_at_tip`, if given, is the
+   * contact of `tip` the caller found (it is inside a collider). */
   bool project_segment(const Substep &substep, const vec3 &node, vec3 tip, float d,
                        const mat3 &chart, vec2 &angles, vec2 &omega, vec3 *r_normal = nullptr,
-                       const std::pair<bool, Contact> *tip_contact = nullptr) const;
+                       const Contact *contact_at_tip = nullptr) const;
 
   StrandParams params_;
   glm::dvec3 origin_wo_;
