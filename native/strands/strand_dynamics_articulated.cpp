@@ -104,6 +104,7 @@ template<int W> struct alignas(chain::lane_alignment) StrandSolver::ArticulatedT
   chain::V3<F> half;             /* d t / 2, to the segment's centre */
   chain::V3<F> force;            /* F at the centre */
   F rate_product;                /* θ̇ φ̇ */
+  chain::M3<F> rest;             /* the rest rotation from the parent's frame */
   F m, d, k;                     /* mass, length, hinge stiffness */
   chain::V2<F> angles, rates;    /* q, q̇ */
 };
@@ -629,6 +630,7 @@ template<int W>
     x.half = half;
     x.force = force;
     x.rate_product = rate.x * rate.y;
+    x.rest = rest;
     x.m = m;
     x.d = d;
     x.k = k;
@@ -646,69 +648,49 @@ template<int W>
 template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_commit(
     const Span<int64_t> curves, const Span<Substep> steps, const Span<mat3> root_frames,
-    const uint8_t *committed, const MutableSpan<int> r_outcomes)
+    const ArticulatedTerms<W> *terms, const uint8_t *committed, const MutableSpan<int> r_outcomes)
 {
   using Floats = chain::Floats<W>;
   LaneScratch<W> &scratch = lane_scratch<W>();
   const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
   size_t first[W];
   bool lanes[W]; /* the lanes that commit and have not run away */
+  float h[W], inv_h[W];
   for (int lane = 0; lane < W; lane++) {
     first[lane] = size_t(curve_offsets_[size_t(curves[lane])]) + 1;
     lanes[lane] = committed[lane];
     scratch.stops[lane].clear();
+    h[lane] = steps[lane].h;
+    inv_h[lane] = 1.0f / h[lane];
+  }
+
+  for (int lane = 0; lane < W; lane++) {
     if (!lanes[lane]) {
       continue;
     }
     /* q̇ += h q̈, q += h q̇ (semi-implicit Euler; the springs already implicit through D). */
-    const float h = steps[lane].h;
     for (size_t i = 0; i < n; i++) {
       const size_t p = first[lane] + i;
       const vec2 q_acceleration = vec2(get(scratch.links[i].acceleration, lane));
       earlier_accelerations_[p] = accelerations_[p];
       accelerations_[p] = q_acceleration;
       vec2 &omega = angular_velocities_[p];
-      omega += h * q_acceleration;
-      if (!(std::abs(omega.x) + std::abs(omega.y) < runaway_speed / rest_lengths_[p])) {
+      omega += h[lane] * q_acceleration;
+      if (!((std::abs(omega.x) + std::abs(omega.y)) * rest_lengths_[p] < runaway_speed)) {
         /* Runaway or not a number: caught before it reaches a collider. */
         r_outcomes[lane] = -1;
         lanes[lane] = false;
         break;
       }
-      angles_[p] += h * omega;
-    }
-    if (!lanes[lane]) {
-      continue;
-    }
-    uint8_t &known = accelerations_known_[size_t(curves[lane])];
-    known = uint8_t(std::min(known + 1, 2));
-    /* The new angles' sines and cosines, W segments at a time (the same bits as one by one:
-     * sin_cos). */
-    size_t i = 0;
-    for (; i + W <= n; i += W) {
-      const float *angles[W];
-      for (int j = 0; j < W; j++) {
-        angles[j] = &angles_[first[lane] + i + size_t(j)].x;
-      }
-      V2<Floats> q;
-      chain::gather2(angles, q);
-      Floats sin_theta, cos_theta, sin_phi, cos_phi;
-      sin_cos<Floats, chain::Ints<W>>(q.x, sin_theta, cos_theta);
-      sin_cos<Floats, chain::Ints<W>>(q.y, sin_phi, cos_phi);
-      for (int j = 0; j < W; j++) {
-        trig_[first[lane] + i + size_t(j)] = vec4(sin_theta[j], cos_theta[j], sin_phi[j],
-                                                  cos_phi[j]);
-      }
-    }
-    for (; i < n; i++) {
-      trig_[first[lane] + i] = Deflection(angles_[first[lane] + i]).trig();
+      angles_[p] += h[lane] * omega;
     }
   }
 
-  /* The new shapes, root to tip, W at once, every operation glm's on each lane; then each
-   * lane's no-penetration projection (Ward & Lin 2003 §5.5) on its own, the lanes' tips
-   * queried in one batch. The caller applies the impulses that stop the projected tips'
-   * motion into the surfaces (scratch.stops).
+  /* The new shapes, root to tip, W at once, every operation glm's on each lane: the new
+   * angles' sines and cosines (the same bits as one by one: sin_cos), the rest rotations and
+   * lengths those pass 1 read (`terms`); then each lane's no-penetration projection (Ward &
+   * Lin 2003 §5.5) on its own, the lanes' tips queried in one batch. The caller applies the
+   * impulses that stop the projected tips' motion into the surfaces (scratch.stops).
    *
    * A projected segment turns alone: its child keeps the direction it had (its hinge takes
    * the turn back), so the strand beyond moves by the tip's small displacement instead of
@@ -725,14 +707,17 @@ template<int W>
   bool keep_direction[W] = {};
   vec3 kept_direction[W];
   for (size_t i = 0; i < n; i++) {
-    size_t points[W];
+    const float *angle_records[W];
     for (int lane = 0; lane < W; lane++) {
-      points[lane] = first[lane] + i;
+      angle_records[lane] = &angles_[first[lane] + i].x;
     }
-    M3<Floats> rest;
-    Floats trig[4], d;
-    load_segment_lanes<W>(points, rest_rotations_.data(), trig_.data(), rest_lengths_.data(),
-                          rest, trig, d);
+    V2<Floats> q;
+    chain::gather2(angle_records, q);
+    Floats trig[4];
+    sin_cos<Floats, chain::Ints<W>>(q.x, trig[0], trig[1]);
+    sin_cos<Floats, chain::Ints<W>>(q.y, trig[2], trig[3]);
+    const M3<Floats> &rest = terms[i].rest;
+    const Floats &d = terms[i].d;
     const M3<Floats> chart{{frame * rest.c[0], frame * rest.c[1], frame * rest.c[2]}};
     for (int lane = 0; lane < W; lane++) {
       if (keep_direction[lane]) {
@@ -775,20 +760,21 @@ template<int W>
         put(tip, lane, lane_tip);
         if (i + 1 < n) {
           keep_direction[lane] = true;
-          kept_direction[lane] = Deflection(trig_[p + 1])
+          kept_direction[lane] = Deflection(angles_[p + 1])
                                      .rotate(get(unprojected, lane) * rest_rotations_[p + 1])[2];
         }
       }
       trig_[p] = deflection.trig();
-      velocities_wo_[p] = (lane_tip - positions_wo_[p]) * (1.0f / steps[lane].h);
+      velocities_wo_[p] = (lane_tip - positions_wo_[p]) * inv_h[lane];
       positions_wo_[p] = lane_tip;
     }
     node = tip;
   }
   for (int lane = 0; lane < W; lane++) {
-    if (lanes[lane] && !scratch.stops[lane].empty()) {
-      /* the impulses change the rates at once: no trend to extrapolate */
-      accelerations_known_[size_t(curves[lane])] = 0;
+    if (lanes[lane]) {
+      /* After impulses (they change the rates at once) no trend to extrapolate. */
+      uint8_t &known = accelerations_known_[size_t(curves[lane])];
+      known = scratch.stops[lane].empty() ? uint8_t(std::min(known + 1, 2)) : 0;
     }
   }
 }
@@ -902,7 +888,7 @@ template<int W>
     counts.contacts += lane_counts[lane].contacts;
   }
   articulated_commit<W>(Span<int64_t>(lane_curves, W), Span<Substep>(lane_steps, W),
-                        Span<mat3>(lane_frames, W), committed,
+                        Span<mat3>(lane_frames, W), lane_terms.data(), committed,
                         MutableSpan<int>(r_outcomes.data(), lanes_num));
   for (int lane = 0; lane < lanes_num; lane++) {
     if (!committed[lane] || r_outcomes[lane] < 0) {

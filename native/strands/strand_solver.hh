@@ -321,13 +321,14 @@ class StrandSolver {
                            Span<uint8_t> queried, ArticulatedTerms<W> *terms,
                            float *r_fastest_turn, Counts *r_counts) const;
   /* For the lanes `committed` of W strands (a lane may repeat another's strand), the step's
-   * hinge accelerations (the recursion's, in the lane scratch) into rates and angles, then the new shapes, W at
-   * once, with each lane's no-penetration projection; each lane's projected segments are left
-   * in a list whose impulses the caller applies. r_outcomes[lane] = -1 where the strand ran
-   * away. */
+   * hinge accelerations (the recursion's, in the lane scratch) into rates and angles, then the
+   * new shapes from pass 1's `terms` (rest rotations and lengths), W at once, with each lane's
+   * no-penetration projection; each lane's projected segments are left in a list whose
+   * impulses the caller applies. r_outcomes[lane] = -1 where the strand ran away. */
   template<int W>
   void articulated_commit(Span<int64_t> curves, Span<Substep> steps, Span<mat3> root_frames,
-                          const uint8_t *committed, MutableSpan<int> r_outcomes);
+                          const ArticulatedTerms<W> *terms, const uint8_t *committed,
+                          MutableSpan<int> r_outcomes);
   /* Each pin of the strand to its rest position carried by the head at the end of the
    * substep, the chain before it reaching it (groom/pins.hh), positions and velocities only:
    * take_back_strand turns them into angles and rates. */
