@@ -57,6 +57,10 @@ template<class R> struct M2 {
 template<class R> struct M3 {
   V3<R> c[3];
 };
+/* A symmetric 3×3 matrix: its diagonal and the entries above it. */
+template<class R> struct S3 {
+  R xx, yy, zz, xy, xz, yz;
+};
 
 /* One lane: writing it (pass 1's single-precision lanes) and reading it (as glm's float or
  * double values). The vector type R of a lane's scalar is any of Lanes and Floats. */
@@ -248,10 +252,6 @@ template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &a, const M3<
 {
   return { { a.c[0] - b.c[0], a.c[1] - b.c[1], a.c[2] - b.c[2] } };
 }
-template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator-(const M3<R> &m)
-{
-  return { { -m.c[0], -m.c[1], -m.c[2] } };
-}
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> operator*(const R &s, const M3<R> &m)
 {
   return { { s * m.c[0], s * m.c[1], s * m.c[2] } };
@@ -263,28 +263,39 @@ template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const M3<R> &m, const V3<
            m.c[0].y * v.x + m.c[1].y * v.y + m.c[2].y * v.z,
            m.c[0].z * v.x + m.c[1].z * v.y + m.c[2].z * v.z };
 }
+/* m v, m symmetric */
+template<class R> HAIRDYN_CHAIN_INLINE V3<R> operator*(const S3<R> &m, const V3<R> &v)
+{
+  return { m.xx * v.x + m.xy * v.y + m.xz * v.z, m.xy * v.x + m.yy * v.y + m.yz * v.z,
+           m.xz * v.x + m.yz * v.y + m.zz * v.z };
+}
+/* x yᵀ + z wᵀ, known to be symmetric: the entries of S3. */
+template<class R> HAIRDYN_CHAIN_INLINE S3<R> symmetric_outer_sum(const V3<R> &x, const V3<R> &y,
+                                                                 const V3<R> &z, const V3<R> &w)
+{
+  return { x.x * y.x + z.x * w.x, x.y * y.y + z.y * w.y, x.z * y.z + z.z * w.z,
+           x.x * y.y + z.x * w.y, x.x * y.z + z.x * w.z, x.y * y.z + z.y * w.z };
+}
+template<class R> HAIRDYN_CHAIN_INLINE S3<R> operator-(const S3<R> &a, const S3<R> &b)
+{
+  return { a.xx - b.xx, a.yy - b.yy, a.zz - b.zz, a.xy - b.xy, a.xz - b.xz, a.yz - b.yz };
+}
 /* mᵀ v */
 template<class R> HAIRDYN_CHAIN_INLINE V3<R> transpose_times(const M3<R> &m, const V3<R> &v)
 {
   return { dot(m.c[0], v), dot(m.c[1], v), dot(m.c[2], v) };
-}
-/* mᵀ */
-template<class R> HAIRDYN_CHAIN_INLINE M3<R> transpose(const M3<R> &m)
-{
-  return { { { m.c[0].x, m.c[1].x, m.c[2].x },
-             { m.c[0].y, m.c[1].y, m.c[2].y },
-             { m.c[0].z, m.c[1].z, m.c[2].z } } };
 }
 /* x yᵀ */
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> outer(const V3<R> &x, const V3<R> &y)
 {
   return { { y.x * x, y.y * x, y.z * x } };
 }
-/* [v]× m and m [v]×, column by column (the products with cross_matrix(v) less its
- * multiplications by zero). */
-template<class R> HAIRDYN_CHAIN_INLINE M3<R> cross_times(const V3<R> &v, const M3<R> &m)
+/* [v]× m (m symmetric) and m [v]×, column by column (the products with cross_matrix(v) less
+ * its multiplications by zero). */
+template<class R> HAIRDYN_CHAIN_INLINE M3<R> cross_times(const V3<R> &v, const S3<R> &m)
 {
-  return { { cross(v, m.c[0]), cross(v, m.c[1]), cross(v, m.c[2]) } };
+  return { { cross(v, V3<R>{ m.xx, m.xy, m.xz }), cross(v, V3<R>{ m.xy, m.yy, m.yz }),
+             cross(v, V3<R>{ m.xz, m.yz, m.zz }) } };
 }
 template<class R> HAIRDYN_CHAIN_INLINE M3<R> times_cross(const M3<R> &m, const V3<R> &v)
 {
@@ -295,12 +306,6 @@ template<class R> HAIRDYN_CHAIN_INLINE M3<R> times_cross(const M3<R> &m, const V
 template<class R> HAIRDYN_CHAIN_INLINE V2<R> operator*(const M2<R> &m, const V2<R> &v)
 {
   return { m.c[0].x * v.x + m.c[1].x * v.y, m.c[0].y * v.x + m.c[1].y * v.y };
-}
-template<class R> HAIRDYN_CHAIN_INLINE M2<R> inverse(const M2<R> &m)
-{
-  const R one_over_determinant = 1.0 / (m.c[0].x * m.c[1].y - m.c[1].x * m.c[0].y);
-  return { { { m.c[1].y * one_over_determinant, -m.c[0].y * one_over_determinant },
-             { -m.c[1].x * one_over_determinant, m.c[0].x * one_over_determinant } } };
 }
 
 }  // namespace hairdyn::chain

@@ -116,6 +116,7 @@ using chain::Lanes;
 using chain::M2;
 using chain::M3;
 using chain::put;
+using chain::S3;
 using chain::V2;
 using chain::V3;
 using chain::widen;
@@ -159,8 +160,9 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
   std::memcpy(&hd, step_lengths, sizeof(hd)); /* no alignment assumed */
   const R zero{};
   /* What the child hands its parent: its I^a and p^a moved to the parent's hinge point (none
-   * for the tip). */
-  M3<R> child_a{}, child_b{}, child_c{};
+   * for the tip). I^a = [a b; bᵀ c] with a and c symmetric: their six entries each. */
+  S3<R> child_a{}, child_c{};
+  M3<R> child_b{};
   V3<R> child_torque{}, child_force{};
   for (size_t i = n; i-- > 0;) {
     const Terms &x = terms[i];
@@ -177,19 +179,20 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
     body.bias_linear = cross(parent_omega, cross(parent_omega, arm));
     /* I^A and p^A: the rod's own, added to what its child hands it (zero at the tip). */
     const R transverse = m * d * d / 3.0;
-    M3<R> a = child_a, b = child_b, c = child_c;
-    a.c[0].x = a.c[0].x + transverse;
-    a.c[1].y = a.c[1].y + transverse;
-    a.c[2].z = a.c[2].z + transverse;
+    S3<R> a = child_a, c = child_c;
+    M3<R> b = child_b;
+    a.xx = a.xx + transverse;
+    a.yy = a.yy + transverse;
+    a.zz = a.zz + transverse;
     b.c[0].y = b.c[0].y + m * half.z;
     b.c[0].z = b.c[0].z + m * -half.y;
     b.c[1].x = b.c[1].x + m * -half.z;
     b.c[1].z = b.c[1].z + m * half.x;
     b.c[2].x = b.c[2].x + m * half.y;
     b.c[2].y = b.c[2].y + m * -half.x;
-    c.c[0].x = c.c[0].x + m;
-    c.c[1].y = c.c[1].y + m;
-    c.c[2].z = c.c[2].z + m;
+    c.xx = c.xx + m;
+    c.yy = c.yy + m;
+    c.zz = c.zz + m;
     const V3<R> p_torque = child_torque - cross(half, force);
     const V3<R> p_force = child_force + (m * cross(omega, cross(omega, half)) - force);
     const R gamma = damping * k; /* Kelvin–Voigt: γ = τ k */
@@ -202,11 +205,13 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
       body.u_angular[j] = a * axes[j];
       body.u_linear[j] = chain::transpose_times(b, axes[j]);
     }
-    M2<R> d_matrix{{{dot(axes[0], body.u_angular[0]), dot(axes[1], body.u_angular[0])},
-                    {dot(axes[0], body.u_angular[1]), dot(axes[1], body.u_angular[1])}}};
-    d_matrix.c[0].x = d_matrix.c[0].x + armature;
-    d_matrix.c[1].y = d_matrix.c[1].y + armature;
-    body.d_inverse = chain::inverse(d_matrix);
+    /* D = Sᵀ I^A S, symmetric, and its inverse. */
+    const R d_00 = dot(axes[0], body.u_angular[0]) + armature;
+    const R d_01 = dot(axes[1], body.u_angular[0]);
+    const R d_11 = dot(axes[1], body.u_angular[1]) + armature;
+    const R one_over_determinant = 1.0 / (d_00 * d_11 - d_01 * d_01);
+    const R di_01 = -d_01 * one_over_determinant;
+    body.d_inverse = {{{d_11 * one_over_determinant, di_01}, {di_01, d_00 * one_over_determinant}}};
     body.u = hinge_torque - V2<R>{dot(axes[0], p_torque), dot(axes[1], p_torque)};
     if (i == 0) {
       break;
@@ -217,14 +222,19 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
     const V3<R> wa1 = di.c[1].x * body.u_angular[0] + di.c[1].y * body.u_angular[1];
     const V3<R> wl0 = di.c[0].x * body.u_linear[0] + di.c[0].y * body.u_linear[1];
     const V3<R> wl1 = di.c[1].x * body.u_linear[0] + di.c[1].y * body.u_linear[1];
-    a = a - outer(wa0, body.u_angular[0]) - outer(wa1, body.u_angular[1]);
+    a = a - chain::symmetric_outer_sum(wa0, body.u_angular[0], wa1, body.u_angular[1]);
     b = b - outer(wa0, body.u_linear[0]) - outer(wa1, body.u_linear[1]);
-    c = c - outer(wl0, body.u_linear[0]) - outer(wl1, body.u_linear[1]);
-    /* To the parent's hinge point: Xᵀ I X with R = [r]×: a − b R + R bᵀ − R c R, b + R c, c.
-     * (−br)ᵀ is added as the negated transpose: the same bits as glm's. */
+    c = c - chain::symmetric_outer_sum(wl0, body.u_linear[0], wl1, body.u_linear[1]);
+    /* To the parent's hinge point: Xᵀ I X with R = [r]× (Rᵀ = −R): a − (b R + (b R)ᵀ) − R c R,
+     * b + R c, c; R c R is symmetric. */
     const M3<R> rc = cross_times(arm, c);
     const M3<R> br = times_cross(b, arm);
-    child_a = a - br + transpose(-br) - times_cross(rc, arm);
+    child_a = {a.xx - (br.c[0].x + br.c[0].x) - (arm.z * rc.c[1].x - arm.y * rc.c[2].x),
+               a.yy - (br.c[1].y + br.c[1].y) - (arm.x * rc.c[2].y - arm.z * rc.c[0].y),
+               a.zz - (br.c[2].z + br.c[2].z) - (arm.y * rc.c[0].z - arm.x * rc.c[1].z),
+               a.xy - (br.c[1].x + br.c[0].y) - (arm.x * rc.c[2].x - arm.z * rc.c[0].x),
+               a.xz - (br.c[2].x + br.c[0].z) - (arm.y * rc.c[0].x - arm.x * rc.c[1].x),
+               a.yz - (br.c[2].y + br.c[1].z) - (arm.y * rc.c[0].y - arm.x * rc.c[1].y)};
     child_b = b + rc;
     child_c = c;
     const V2<R> du = di * body.u;
