@@ -741,7 +741,6 @@ template<int W>
       }
     }
     rotate_chart(trig[0], trig[1], trig[2], trig[3], chart.c, frame.c);
-    const M3<Floats> unprojected = frame;
     V3<Floats> tip = node + d * frame.c[2];
     ContactBatch<8> contacts;
     find_lane_contacts(colliders_, tip, contacts);
@@ -763,6 +762,7 @@ template<int W>
         scratch.stops[lane].emplace_back(i, normal);
         deflection = Deflection(angles_[p]);
         const mat3 projected = deflection.rotate(get(chart, lane));
+        const mat3 unprojected = get(frame, lane);
         lane_tip = get(node, lane) + d[lane] * projected[2];
         for (int j = 0; j < 3; j++) {
           put(frame.c[j], lane, projected[j]);
@@ -771,7 +771,7 @@ template<int W>
         if (i + 1 < n) {
           keep_direction[lane] = true;
           kept_direction[lane] = Deflection(angles_[p + 1])
-                                     .rotate(get(unprojected, lane) * rest_rotations_[p + 1])[2];
+                                     .rotate(unprojected * rest_rotations_[p + 1])[2];
         }
       }
       trig_[p] = deflection.trig();

@@ -81,7 +81,9 @@ struct ForceField {
     const V relative = wind - v;
     const S speed = length(relative);
     const S rate = form_drag * speed; /* kg/m/s */
-    const S drag = mass_per_length > 0.0f ? rate / (1.0f + h * rate / mass_per_length) : rate;
+    const S drag = mass_per_length > 0.0f ?
+                       rate * mass_per_length / (mass_per_length + h * rate) :
+                       rate;
     return d * (base + position_gradient * r + velocity_gradient * v + air_drag * wind +
                 drag * relative);
   }
