@@ -51,13 +51,13 @@ inline float atan2_fast(const float y, const float x)
   return std::copysign(r, y);
 }
 
-/* sin x and cos x in single precision (the strands' hinge angles, the wind's waves): x less the nearest multiple k
- * of π/2 (Cody and Waite's reduction, π/2 in three parts: exact for |x| up to 5·10⁴ rad), then
- * the minimax polynomials of Cephes's sinf and cosf on [−π/4, π/4] (S. L. Moshier, Cephes Math
- * Library), the quadrant k mod 4 choosing and signing them: sin 0 = 0 and cos 0 = 1 exactly.
- * Written once for a float (I = int32_t) and for GCC vectors of floats (I the vector of
- * int32_t with as many lanes), every operation elementwise and none fused: a segment's sines
- * and cosines have the same bits in a vector of segments as alone (test
+/* sin x and cos x in single precision (the strands' hinge angles, the wind's waves): x less the
+ * nearest multiple k of π/2 (Cody and Waite's reduction, π/2 in three parts: exact for |x| up to
+ * 5·10⁴ rad), then the minimax polynomials of Cephes's sinf and cosf on [−π/4, π/4] (S. L.
+ * Moshier, Cephes Math Library), the quadrant k mod 4 choosing and signing them: sin 0 = 0 and
+ * cos 0 = 1 exactly. Written once for a float (I = int32_t) and for GCC vectors of floats (I the
+ * vector of int32_t with as many lanes), every operation elementwise and none fused: a segment's
+ * sines and cosines have the same bits in a vector of segments as alone (test
  * StrandsDeflection.SinCosIsAccurateAndTheSameInLanes). */
 template<class F, class I> inline void sin_cos(const F &x, F &r_sin, F &r_cos)
 {

@@ -431,12 +431,12 @@ template<int W>
   assert(curves.size() <= group_strands_max);
   const int64_t lanes_num = curves.size();
   const float shortest = substep.h / float(max_turn_steps);
-  Substep steps[group_strands_max];
+  float step_h[group_strands_max]; /* each strand's step */
   float remaining[group_strands_max];
   bool split_any[group_strands_max];
   int64_t active[group_strands_max]; /* the strands still stepping */
   for (int64_t k = 0; k < lanes_num; k++) {
-    steps[k] = substep;
+    step_h[k] = substep.h;
     remaining[k] = substep.h;
     split_any[k] = false;
     r_finite[k] = 1;
@@ -449,7 +449,6 @@ template<int W>
     /* One step of every strand still stepping, W at a time: those that cut their steps fill
      * the vectors together, whichever strands they stepped beside at first. */
     int64_t step_curves[group_strands_max];
-    Substep step_of[group_strands_max];
     uint8_t may_split[group_strands_max];
     mat3 frames[group_strands_max];
     vec3 step_winds[group_strands_max];
@@ -457,13 +456,9 @@ template<int W>
     for (int64_t j = 0; j < active_num; j++) {
       const int64_t k = active[j];
       /* The last step takes what remains (rounding leaves no sliver of a step). */
-      h[j] = remaining[k] <= 1.001f * steps[k].h ? remaining[k] : steps[k].h;
-      if (h[j] != steps[k].h) {
-        steps[k].h = h[j];
-        steps[k].reaction.dt = h[j]; /* the substep's collision constants, for this step */
-      }
+      h[j] = remaining[k] <= 1.001f * step_h[k] ? remaining[k] : step_h[k];
+      step_h[k] = h[j];
       step_curves[j] = curves[k];
-      step_of[j] = steps[k];
       may_split[j] = h[j] > shortest * 1.5f;
       frames[j] = root_frames[k];
       step_winds[j] = winds[k];
@@ -471,8 +466,8 @@ template<int W>
     int outcomes[group_strands_max];
     for (int64_t first = 0; first < active_num; first += W) {
       const int64_t num = std::min<int64_t>(W, active_num - first);
-      articulated_step<W>(Span<int64_t>(step_curves + first, num),
-                          Span<Substep>(step_of + first, num),
+      articulated_step<W>(Span<int64_t>(step_curves + first, num), substep,
+                          Span<float>(h + first, num),
                           Span<uint8_t>(may_split + first, num), Span<mat3>(frames + first, num),
                           Span<vec3>(step_winds + first, num), counts,
                           MutableSpan<int>(outcomes + first, num));
@@ -494,8 +489,7 @@ template<int W>
           substep_start[k].assign(positions_wo_.begin() + points.start,
                                   positions_wo_.begin() + points.one_after_last());
         }
-        steps[k].h = std::max(h[j] / float(outcomes[j]), shortest);
-        steps[k].reaction.dt = steps[k].h;
+        step_h[k] = std::max(h[j] / float(outcomes[j]), shortest);
         active[kept++] = k;
         continue;
       }
@@ -541,8 +535,9 @@ template<int W>
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_forward(
-    const Span<int64_t> curves, const Span<Substep> steps, const Span<mat3> root_frames,
-    const Span<vec3> winds, const Span<const vec2 *> mid_accelerations,
+    const Span<int64_t> curves, const Substep &substep, const float *step_lengths,
+    const Span<mat3> root_frames, const Span<vec3> winds,
+    const Span<const vec2 *> mid_accelerations,
     const Span<uint8_t> queried, ArticulatedTerms<W> *terms, float *r_fastest_turn,
     Counts *r_counts) const
 {
@@ -559,13 +554,12 @@ template<int W>
   const float density = line_density();
   /* The head, its forces and the wind field are the substep's for every lane; only the step
    * length h differs between lanes (a strand cutting its substep). */
-  const Substep &shared = steps[0];
-  const vec3 head_center = shared.pose.translation;
+  const vec3 head_center = substep.pose.translation;
   Floats h{};
   M3<Floats> frame{};
   V3<Floats> node{}, wind{};
   for (int lane = 0; lane < W; lane++) {
-    h[lane] = steps[lane].h;
+    h[lane] = step_lengths[lane];
     for (int j = 0; j < 3; j++) {
       put(frame.c[j], lane, root_frames[lane][j]);
     }
@@ -613,18 +607,20 @@ template<int W>
     const V3<Floats> center = node + half;
     const V3<Floats> tip = node + d * t;
     const V3<Floats> center_velocity = node_velocity + cross(omega, half) +
-                                       shared.head_velocity.of_point(center - head_center);
+                                       substep.head_velocity.of_point(center - head_center);
     const V3<Floats> tip_velocity = node_velocity + cross(omega, d * t) +
-                                    shared.head_velocity.of_point(tip - head_center);
-    V3<Floats> force = shared.forces.on_segment(d, center, center_velocity, wind, h);
+                                    substep.head_velocity.of_point(tip - head_center);
+    V3<Floats> force = substep.forces.on_segment(d, center, center_velocity, wind, h);
     ContactBatch<8> contacts;
     find_lane_contacts(colliders_, tip, contacts);
     for (int lane = 0; colliders_ != nullptr && lane < W; lane++) {
       Contact contact;
       if (queried[lane] && contacts.read(lane, contact)) {
+        ReactionConstants reaction = substep.reaction;
+        reaction.dt = h[lane]; /* the substep's collision constants, for this step */
         put(force, lane,
             contact_force(get(force, lane), d[lane], get(tip_velocity, lane), contact,
-                          steps[lane].reaction));
+                          reaction));
         r_counts[lane].contacts++;
       }
     }
@@ -657,8 +653,9 @@ template<int W>
 
 template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_commit(
-    const Span<int64_t> curves, const Span<Substep> steps, const Span<mat3> root_frames,
-    const ArticulatedTerms<W> *terms, const uint8_t *committed, const MutableSpan<int> r_outcomes)
+    const Span<int64_t> curves, const Substep &substep, const float *step_lengths,
+    const Span<mat3> root_frames, const ArticulatedTerms<W> *terms, const uint8_t *committed,
+    const MutableSpan<int> r_outcomes)
 {
   using Floats = chain::Floats<W>;
   LaneScratch<W> &scratch = lane_scratch<W>();
@@ -670,7 +667,7 @@ template<int W>
     first[lane] = size_t(curve_offsets_[size_t(curves[lane])]) + 1;
     lanes[lane] = committed[lane];
     scratch.stops[lane].clear();
-    h[lane] = steps[lane].h;
+    h[lane] = step_lengths[lane];
     inv_h[lane] = 1.0f / h[lane];
   }
 
@@ -755,7 +752,7 @@ template<int W>
       vec3 normal;
       Contact contact;
       if (colliders_ != nullptr && contacts.read(lane, contact) &&
-          project_segment(steps[lane], get(node, lane), lane_tip, d[lane], get(chart, lane),
+          project_segment(substep, get(node, lane), lane_tip, d[lane], get(chart, lane),
                           angles_[p], angular_velocities_[p], &normal, &contact))
       {
         angular_velocities_[p] = rate; /* the impulse stops it */
@@ -792,7 +789,8 @@ template<int W>
 
 template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_step(
-    const Span<int64_t> curves, const Span<Substep> steps, const Span<uint8_t> may_split,
+    const Span<int64_t> curves, const Substep &substep, const Span<float> step_lengths,
+    const Span<uint8_t> may_split,
     const Span<mat3> root_frames, const Span<vec3> winds, Counts &counts,
     const MutableSpan<int> r_outcomes)
 {
@@ -808,7 +806,7 @@ template<int W>
   /* Every lane holds a strand: those past the group's repeat its first (their results are
    * dropped). */
   int64_t lane_curves[W];
-  Substep lane_steps[W];
+  float lane_h[W];
   mat3 lane_frames[W];
   vec3 lane_winds[W];
   const vec2 *mids[W];
@@ -817,7 +815,7 @@ template<int W>
   for (int lane = 0; lane < W; lane++) {
     const int from = lane < lanes_num ? lane : 0;
     lane_curves[lane] = curves[from];
-    lane_steps[lane] = steps[from];
+    lane_h[lane] = step_lengths[from];
     lane_frames[lane] = root_frames[from];
     lane_winds[lane] = winds[from];
     lane_mid_accelerations[lane].resize(n);
@@ -832,7 +830,7 @@ template<int W>
    * its step and must. */
   const auto steps_needed = [&](const int lane,
                                 const float fastest_turn) HAIRDYN_CHAIN_INLINE_LAMBDA {
-    const float turn = steps[lane].h * fastest_turn;
+    const float turn = step_lengths[lane] * fastest_turn;
     return may_split[lane] && turn > max_turn_per_step ?
                std::min(int(std::ceil(turn / max_turn_per_step)), max_turn_steps) :
                1;
@@ -845,10 +843,10 @@ template<int W>
   const auto stage = [&](const uint8_t *queried) HAIRDYN_CHAIN_INLINE_LAMBDA {
     double hd[W];
     for (int lane = 0; lane < W; lane++) {
-      hd[lane] = double(lane_steps[lane].h);
+      hd[lane] = double(lane_h[lane]);
       lane_counts[lane] = Counts();
     }
-    articulated_forward<W>(Span<int64_t>(lane_curves, W), Span<Substep>(lane_steps, W),
+    articulated_forward<W>(Span<int64_t>(lane_curves, W), substep, lane_h,
                            Span<mat3>(lane_frames, W), Span<vec3>(lane_winds, W),
                            Span<const vec2 *>(mids, W), Span<uint8_t>(queried, W),
                            lane_terms.data(), fastest_turn, lane_counts);
@@ -897,7 +895,7 @@ template<int W>
     committed[lane] = 1;
     counts.contacts += lane_counts[lane].contacts;
   }
-  articulated_commit<W>(Span<int64_t>(lane_curves, W), Span<Substep>(lane_steps, W),
+  articulated_commit<W>(Span<int64_t>(lane_curves, W), substep, lane_h,
                         Span<mat3>(lane_frames, W), lane_terms.data(), committed,
                         MutableSpan<int>(r_outcomes.data(), lanes_num));
   for (int lane = 0; lane < lanes_num; lane++) {

@@ -299,15 +299,16 @@ class StrandSolver {
   template<int W>
   void articulated_substep(Span<int64_t> curves, const Substep &substep, Span<mat3> root_frames,
                            Span<vec3> winds, Counts &counts, MutableSpan<uint8_t> r_finite);
-  /* One step of steps[k].h for each of `curves` (one point count, up to W).
+  /* One step of step_lengths[k] within `substep` for each of `curves` (one point count, up to
+   * W).
    * r_outcomes[k]: 1 when strand k took it; -1 when it ran away; n > 1 when it may cut its
    * step (may_split[k]) and turns more than max_turn_per_step within it: then it is left
    * unchanged, and n equal steps (at most max_turn_steps) keep every turn within the bound.
    * Each strand's bits are those it has stepped alone. */
   template<int W>
-  void articulated_step(Span<int64_t> curves, Span<Substep> steps, Span<uint8_t> may_split,
-                        Span<mat3> root_frames, Span<vec3> winds, Counts &counts,
-                        MutableSpan<int> r_outcomes);
+  void articulated_step(Span<int64_t> curves, const Substep &substep, Span<float> step_lengths,
+                        Span<uint8_t> may_split, Span<mat3> root_frames, Span<vec3> winds,
+                        Counts &counts, MutableSpan<int> r_outcomes);
   /* The q̈ that the mid-step rates of strand `curve`'s next step take: the last two steps'
    * extrapolated, or zeros (a predictor stage's) when they are not both known. */
   void mid_step_accelerations(int64_t curve, MutableSpan<vec2> r_accelerations) const;
@@ -318,7 +319,8 @@ class StrandSolver {
    * counted per lane in r_counts) and the hinges, into `terms` (one per segment). Writes each
    * lane's fastest turn (rad/s) of a segment or across a hinge. */
   template<int W>
-  void articulated_forward(Span<int64_t> curves, Span<Substep> steps, Span<mat3> root_frames,
+  void articulated_forward(Span<int64_t> curves, const Substep &substep,
+                           const float *step_lengths, Span<mat3> root_frames,
                            Span<vec3> winds, Span<const vec2 *> mid_accelerations,
                            Span<uint8_t> queried, ArticulatedTerms<W> *terms,
                            float *r_fastest_turn, Counts *r_counts) const;
@@ -328,7 +330,8 @@ class StrandSolver {
    * no-penetration projection; each lane's projected segments are left in a list whose
    * impulses the caller applies. r_outcomes[lane] = -1 where the strand ran away. */
   template<int W>
-  void articulated_commit(Span<int64_t> curves, Span<Substep> steps, Span<mat3> root_frames,
+  void articulated_commit(Span<int64_t> curves, const Substep &substep,
+                          const float *step_lengths, Span<mat3> root_frames,
                           const ArticulatedTerms<W> *terms, const uint8_t *committed,
                           MutableSpan<int> r_outcomes);
   /* Each pin of the strand to its rest position carried by the head at the end of the
