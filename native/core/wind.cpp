@@ -38,24 +38,12 @@ vec3 WindField::velocity_at(const vec3 &p, const float time) const
   if (turbulence_ == 0.0f) {
     return mean_;
   }
-  /* Every wave's phase, their sines at once (sin_cos on a vector). */
-  typedef float Phases __attribute__((vector_size(8 * sizeof(float))));
-  typedef int32_t PhaseInts __attribute__((vector_size(8 * sizeof(int32_t))));
-  static_assert(3 * waves_num <= 8);
-  Phases phase{};
-  for (int component = 0; component < 3; component++) {
-    for (int wave = 0; wave < waves_num; wave++) {
-      phase[component * waves_num + wave] = angular_frequencies_[component][wave] * time -
-                                            glm::dot(wave_vectors_[component][wave], p) +
-                                            phases_[component][wave];
-    }
-  }
-  Phases sines, cosines;
-  sin_cos<Phases, PhaseInts>(phase, sines, cosines);
   vec3 noise(0.0f);
   for (int component = 0; component < 3; component++) {
     for (int wave = 0; wave < waves_num; wave++) {
-      noise[component] += sines[component * waves_num + wave];
+      noise[component] += std::sin(angular_frequencies_[component][wave] * time -
+                                   glm::dot(wave_vectors_[component][wave], p) +
+                                   phases_[component][wave]);
     }
   }
   return mean_ + (turbulence_ / float(waves_num)) * noise;

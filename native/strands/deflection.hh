@@ -3,10 +3,46 @@
  * strand_solver.hh): its columns are e_θ = ∂d/∂θ, e_φ = ∂d/∂φ / cos θ and
  * d = (sin θ, cos θ sin φ, cos θ cos φ). */
 #include <cmath>
+#include <cstdint>
+#include <type_traits>
 
 #include "core/math.hh"
 
 namespace hairdyn {
+
+/* sin x and cos x in single precision, for the hinges' angles: x less the nearest multiple k
+ * of π/2 (Cody and Waite's reduction, π/2 in three parts: exact for |x| up to 5·10⁴ rad), then
+ * the minimax polynomials of Cephes's sinf and cosf on [−π/4, π/4] (S. L. Moshier, Cephes Math
+ * Library), the quadrant k mod 4 choosing and signing them: sin 0 = 0 and cos 0 = 1 exactly.
+ * Written once for a float (I = int32_t) and for GCC vectors of floats (I the vector of
+ * int32_t with as many lanes), every operation elementwise and none fused: a segment's sines
+ * and cosines have the same bits in a vector of segments as alone (test
+ * StrandsDeflection.SinCosIsAccurateAndTheSameInLanes). */
+template<class F, class I> inline void sin_cos(const F &x, F &r_sin, F &r_cos)
+{
+  /* x · 2/π rounded to the nearest integer (ties to even) by adding and taking away 1.5 · 2²³. */
+  const F k = (x * 0.636619772f + 12582912.0f) - 12582912.0f;
+  const F r = ((x - k * 1.5703125f) - k * 4.837512969970703125e-4f) -
+              k * 7.54978995489188216e-8f;
+  const F z = r * r;
+  const F s = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
+  const F c = ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z +
+               4.166664568298827e-2f) *
+                  z * z -
+              0.5f * z + 1.0f;
+  I q;
+  if constexpr (std::is_same_v<F, float>) {
+    q = I(k);
+  }
+  else {
+    q = __builtin_convertvector(k, I);
+  }
+  /* sin x: s, c, −s, −c and cos x: c, −s, −c, s in quadrants 0 to 3. */
+  const auto swap = (q & 1) != 0;
+  const F sin_x = swap ? c : s, cos_x = swap ? s : c;
+  r_sin = (q & 2) != 0 ? -sin_x : sin_x;
+  r_cos = ((q + 1) & 2) != 0 ? -cos_x : cos_x;
+}
 
 /* chart · D without forming D: each column of D is a combination of chart's columns
  * (chart[0..2], r_frame[0..2]). For any scalar S and vector V with these operations: one
