@@ -570,7 +570,9 @@ template<int W>
   V3<Floats> node_velocity{}; /* relative to the head */
   V3<Floats> parent_omega{};  /* relative to the head */
   V3<Floats> arm{};
-  Floats fastest_turn{}; /* rad/s, of a segment or across a hinge */
+  /* (rad/s)², of a segment or across a hinge: squares compared, one square root at the end
+   * (the same bits as comparing the lengths, √ being monotonic and correctly rounded). */
+  Floats fastest_turn2{};
   for (size_t i = 0; i < n; i++) {
     size_t points[W];
     const float *rate_records[W], *mid_records[W], *angle_records[W];
@@ -599,7 +601,8 @@ template<int W>
     node = node + arm;
     node_velocity = node_velocity + cross(parent_omega, arm);
     const V3<Floats> omega = parent_omega + relative_turn;
-    fastest_turn = chain::max(fastest_turn, chain::max(length(omega), length(relative_turn)));
+    fastest_turn2 = chain::max(fastest_turn2,
+                               chain::max(dot(omega, omega), dot(relative_turn, relative_turn)));
 
     /* The external force at the centre (Kurihara 1993, eq. 6; reaction constraint eq. 12–15
      * where the tip is inside a collider), from world velocities. */
@@ -647,7 +650,7 @@ template<int W>
     arm = d * t;
   }
   for (int lane = 0; lane < W; lane++) {
-    r_fastest_turn[lane] = fastest_turn[lane];
+    r_fastest_turn[lane] = std::sqrt(fastest_turn2[lane]);
   }
 }
 
