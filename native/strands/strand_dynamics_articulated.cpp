@@ -58,11 +58,11 @@
  *
  * Strands of one point count step W at a time (StrandSolver::group_strands; W = 8 with
  * AVX-512, 4 otherwise): pass 1 (the shape and forces) in vectors of W floats, the tips'
- * contacts queried strand by strand; passes 2 and 3 in vectors of W doubles
+ * contacts queried in one batch; passes 2 and 3 in vectors of W doubles
  * (strands/chain_lanes.hh), every operation as glm evaluates it, so a strand keeps the bits
- * it has alone (test LanesGiveEachStrandItsOwnBits); the commit with its projection strand by
- * strand. Each strand predicts and cuts its steps on its own; a lane without a strand in a
- * stage repeats another's, its result dropped. */
+ * it has alone (test LanesGiveEachStrandItsOwnBits); the commit's new shapes in vectors of W
+ * floats, each lane's projection on its own. Each strand predicts and cuts its steps on its
+ * own; a lane without a strand in a stage repeats another's, its result dropped. */
 #include <algorithm>
 #include <atomic>
 #include <cassert>
