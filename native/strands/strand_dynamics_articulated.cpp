@@ -686,8 +686,7 @@ template<int W>
       accelerations_[p] = q_acceleration;
       vec2 &omega = angular_velocities_[p];
       omega += h[lane] * q_acceleration;
-      if (!((std::abs(omega.x) + std::abs(omega.y)) * rest_lengths_[p] < runaway_speed)) {
-        /* Runaway or not a number: caught before it reaches a collider. */
+      if (hinge_runs_away(omega, rest_lengths_[p])) {
         r_outcomes[lane] = -1;
         lanes[lane] = false;
         break;
@@ -917,8 +916,8 @@ template<int W>
 /* Each vector code's clone of the substep, with the lane width its registers hold best:
  * AVX-512 steps eight strands at once (the recursion's doubles in 512-bit vectors, pass 1's
  * floats in 256-bit ones, and 32 registers for the 3×3 blocks), AVX2 and the baseline four
- * (eight lanes on AVX2's 16 registers spill: 1.6× slower). On BM_StrandStep, 1 core: AVX-512
- * 34 ms, AVX2 51 ms, baseline 86 ms; the same bits on all. */
+ * (eight lanes on AVX2's 16 registers spill: 1.6× slower); the same bits on all (figures per
+ * code: README, Performance). */
 template<>
 void StrandSolver::advance_articulated_as<VectorCode::Baseline>(
     const Span<int64_t> curves, const Substep &substep, const Span<mat3> root_frames,

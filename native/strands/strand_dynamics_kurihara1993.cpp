@@ -47,8 +47,8 @@ bool StrandSolver::advance_kurihara(const IndexRange points, const Substep &subs
 
     /* Kurihara 1993, eq. 1 and 4: explicit eq. 7 or Ward & Lin 2003, appendix A. */
     advance_hinge(hinge_steps_[i], h, k, torque, angles, omega);
-    if (!(std::abs(omega.x) + std::abs(omega.y) < runaway_speed / d)) {
-      return false; /* Runaway or not a number: caught before it reaches a collider. */
+    if (hinge_runs_away(omega, d)) {
+      return false;
     }
 
     /* Rebuild the segment from its new angles: its length cannot change. */

@@ -203,6 +203,12 @@ class StrandSolver {
    * by the head, so no NaN ever leaves the solver; the caller should fail the frame. */
   int64_t diverged_num() const { return diverged_num_; }
   static constexpr float runaway_speed = 1000.0f; /* m/s: no hair moves this fast. */
+  /* Whether hinge rates `omega` (rad/s) swing a segment of length d faster than runaway_speed,
+   * or are not numbers: both strand models stop such a strand before it reaches a collider. */
+  static bool hinge_runs_away(const vec2 &omega, const float d)
+  {
+    return !((std::abs(omega.x) + std::abs(omega.y)) * d < runaway_speed);
+  }
   /* A pin is reached to this share of the length of strand before it (3 µm on a 0.3 m
    * strand, far under what shows), within pin_iterations Newton steps (groom/pins.hh). */
   static constexpr float pin_tolerance_relative = 1e-5f;
