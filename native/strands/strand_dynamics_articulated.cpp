@@ -750,14 +750,14 @@ template<int W>
       const size_t p = first[lane] + i;
       Deflection deflection(vec4(trig[0][lane], trig[1][lane], trig[2][lane], trig[3][lane]));
       vec3 lane_tip = get(tip, lane);
-      const vec2 rate = angular_velocities_[p];
       vec3 normal;
       Contact contact;
+      vec2 stopped_rates; /* the projection's zeros: the hinge keeps its rates, an impulse
+                           * through the chain stops the tip (stop_at_contact) */
       if (colliders_ != nullptr && contacts.read(lane, contact) &&
           project_segment(substep, get(node, lane), lane_tip, d[lane], get(chart, lane),
-                          angles_[p], angular_velocities_[p], &normal, &contact))
+                          angles_[p], stopped_rates, &normal, &contact))
       {
-        angular_velocities_[p] = rate; /* the impulse stops it */
         scratch.stops[lane].emplace_back(i, normal);
         deflection = Deflection(angles_[p]);
         const mat3 projected = deflection.rotate(get(chart, lane));
