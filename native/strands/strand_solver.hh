@@ -423,7 +423,7 @@ class StrandSolver {
   /* Strands of one point count that advance a substep together, as many at a time as the
    * vector code has lanes (chain_lanes.hh); the more there are, the fuller the vectors of
    * those that cut their substeps into steps. */
-  static constexpr int group_strands_max = 32;
+  static constexpr int group_strands_max = 128;
   struct StrandGroup {
     int64_t curves[group_strands_max];
     int64_t size = 0;
