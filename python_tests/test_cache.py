@@ -334,6 +334,31 @@ def test_reads_are_bit_exact_and_reused_buffers_stay_put(tmp_path):
         assert str(cache.frame_path(1)) not in maps.read_text()
 
 
+def test_split_columns_copies_every_width_and_checks_every_value():
+    """The native pass behind every read: spans of widths 1, 2 and 3 (and none for column 5)
+    of a table long enough for several chunks come out exact; a NaN or an infinity anywhere,
+    in a column no span copies too, makes it report a table that is not finite."""
+    from hairdyn import native
+
+    split = native.load().split_columns
+    rng = np.random.default_rng(3)
+    table = rng.normal(size=(20_000, 9)).astype(np.float32)
+    spans = {0: 3, 3: 2, 6: 2, 8: 1}  # first column: width (column 5 unused)
+    outs = {start: np.empty(len(table) * width, np.float32) for start, width in spans.items()}
+    assert split(table, [(outs[start], start) for start in spans])
+    for start, width in spans.items():
+        expected = np.ascontiguousarray(table[:, start:start + width])
+        assert outs[start].tobytes() == expected.tobytes()
+    for row, column, bad in ((19_999, 5, np.nan), (0, 0, np.inf), (12_345, 8, -np.inf)):
+        broken = table.copy()
+        broken[row, column] = bad
+        assert not split(broken, [(outs[start], start) for start in spans])
+    with pytest.raises(ValueError, match="C-contiguous"):
+        split(np.asfortranarray(table), [])
+    with pytest.raises(ValueError, match="whole rows of columns inside the table"):
+        split(table, [(np.empty(len(table) * 3, np.float32), 7)])
+
+
 def test_a_frame_cut_short_or_reordered_is_refused(tmp_path):
     cache = make_cache(tmp_path)
     cache.write_frame(1, frame_data())

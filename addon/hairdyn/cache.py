@@ -19,8 +19,9 @@ anything is written.
 Nothing read back is trusted: the manifest's counts and column spans are checked when it is
 opened, and every table read is checked for its dtype, shape and finite values before it is
 handed out (CacheError naming the file otherwise). A table is read through a memory map of its
-file and its columns copied straight out of the map (into the cache's own buffers for playback:
-no allocation per frame); the map goes with the table's last view. A file is never changed in
+file and its columns copied straight out of the map, in one native pass that also checks every
+value (into the cache's own buffers for playback: no allocation per frame); the map goes with
+the table's last view. A file is never changed in
 place (it is replaced by a rename), so a map sees one whole file. A resumed bake checks the
 frames it keeps (prepare_resume) and refuses a groom whose rest positions moved since the bake
 started (the manifest keeps a hash of them).
@@ -34,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import native
 from .errors import HairdynError
 
 FORMAT = "hairdyn-cache"
@@ -135,58 +137,32 @@ class _Layout:
     def read(self, path, what, buffers=None):
         """The named columns of the table in the .npy file `path`, after checking its dtype,
         shape and values: CacheError naming the file otherwise. The file is memory-mapped and
-        each column copied once out of the map, into `buffers` ({name: array} that read fills
-        in and returns, so nothing is allocated per frame) or into new arrays."""
+        its columns copied out of the map in one native pass that checks every value, into
+        `buffers` ({name: array} that read fills in and returns, so nothing is allocated per
+        frame) or into new arrays."""
         table = _mapped_table(path, what)
-        self._check(path, table)
-        if buffers is None:
-            return {name: _column(table, start, stop)
-                    for name, (start, stop) in self.columns.items()}
-        if not buffers:
-            buffers.update({name: _column(table, start, stop)
-                            for name, (start, stop) in self.columns.items()})
-        else:
-            for name, (start, stop) in self.columns.items():
-                _column(table, start, stop, out=buffers[name])
-        return buffers
-
-    def _check(self, path, table):
-        """CacheError unless `table` is this layout's float32 (points, width) of finite
-        values."""
         if table.dtype != np.float32 or table.shape != (self.points_num, self.width) or \
                 not table.flags.c_contiguous:
             order = "" if table.flags.c_contiguous else " in Fortran order"
             raise CacheError(f"The cache frame '{path}' holds {table.dtype} {table.shape}"
                              f"{order}, the manifest says float32 ({self.points_num}, "
                              f"{self.width})")
-        # One sum finds any NaN or infinity (they make it NaN or infinite) without a mask the
-        # size of the table; only a sum that overflowed or a bad table pays for the mask.
-        with np.errstate(over="ignore", invalid="ignore"):
-            if np.isfinite(np.add.reduce(table, axis=None)):
-                return
-        finite = np.isfinite(table)
-        if not finite.all():
+        buffers = {} if buffers is None else buffers
+        if not buffers:
+            buffers.update({name: np.empty((len(table),) if stop - start == 1 else
+                                           (len(table), stop - start), np.float32)
+                            for name, (start, stop) in self.columns.items()})
+        outputs = [(buffers[name].reshape(-1), start)
+                   for name, (start, _) in self.columns.items()]
+        if not native.load().split_columns(table, outputs):
+            finite = np.isfinite(table)
             bad = sorted(name for name, (start, stop) in self.columns.items()
                          if not finite[:, start:stop].all())
             point = int(np.flatnonzero(~finite.all(axis=1))[0])
             raise CacheError(f"The cache frame '{path}' has values that are not finite numbers "
-                             f"in {', '.join(bad)} (point {point}): bake again")
-
-
-def _column(table, start, stop, out=None):
-    """Columns start:stop of a (points, width) float32 table as a contiguous (points,) or
-    (points, stop - start) array (`out` when given), ready for foreach_set without another
-    copy. Each row's slice is copied as one record (numpy copies a strided 3-float slice
-    value by value, 2.5 times slower)."""
-    width = stop - start
-    if out is None:
-        out = np.empty((len(table),) if width == 1 else (len(table), width), np.float32)
-    if len(table):
-        item = np.dtype((np.void, 4 * width))
-        record = np.dtype({"names": ["v"], "formats": [item], "offsets": [4 * start],
-                           "itemsize": table.strides[0]})
-        np.copyto(out.reshape(len(table), width).view(item)[:, 0], table.view(record)["v"][:, 0])
-    return out
+                             f"in {', '.join(bad) or 'a column no attribute uses'} (point "
+                             f"{point}): bake again")
+        return buffers
 
 
 def _read_header(file):

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "core/columns.hh"
 #include "core/parallel.hh"
 #include "groom/follow.hh"
 #include "groom/groom.hh"
@@ -93,6 +94,43 @@ void bind_groom(py::module_ &m)
         return count_nonfinite(as_float3_unchecked(positions, "positions"));
       },
       py::arg("positions"), "Number of points with a NaN or infinite coordinate.");
+
+  m.def(
+      "split_columns",
+      [](const py::handle table, const py::sequence outputs) {
+        /* The table's width from its own shape, so that anything but a 2-D array fails in
+         * check_array's words. */
+        const bool two_d = py::isinstance<py::array>(table) &&
+                           py::reinterpret_borrow<py::array>(table).ndim() == 2;
+        const int64_t width = two_d ? py::reinterpret_borrow<py::array>(table).shape(1) : 1;
+        const py::array source = check_array(table, "table", py::dtype::of<float>(), "float32",
+                                             width);
+        const int64_t rows = source.shape(0);
+        std::vector<ColumnSpan> columns;
+        for (const py::handle item : outputs) {
+          const py::tuple pair = item.cast<py::tuple>();
+          if (pair.size() != 2) {
+            fail("each output must be (array, first column)");
+          }
+          py::array out = check_array(pair[0], "output", py::dtype::of<float>(), "float32", 0);
+          const int64_t start = pair[1].cast<int64_t>();
+          const int64_t out_width = rows > 0 ? out.shape(0) / rows : 0;
+          if (!out.writeable() || out.shape(0) != rows * out_width || start < 0 ||
+              start + out_width > width || (rows > 0 && out_width == 0))
+          {
+            fail("an output must be a writable float32 array of whole rows of columns "
+                 "inside the table");
+          }
+          columns.push_back({static_cast<float *>(out.mutable_data()), start, out_width});
+        }
+        const float *values = static_cast<const float *>(source.data());
+        py::gil_scoped_release release;
+        return split_columns(values, rows, width, columns);
+      },
+      py::arg("table"), py::arg("outputs"),
+      "Copy columns of a (N, W) float32 table into flat float32 arrays, outputs a sequence of "
+      "(array of N * w values, first column), in one pass that also checks the whole table: "
+      "returns whether every value is finite (the outputs are filled either way).");
 
   m.def("set_thread_num", &set_thread_num, py::arg("thread_num"),
         "Threads the solvers use; 0 means all cores.");
