@@ -21,10 +21,9 @@ opened, and every table read is checked for its dtype, shape and finite values b
 handed out (CacheError naming the file otherwise). A table is read through a memory map of its
 file and its columns copied straight out of the map, in one native pass that also checks every
 value (into the cache's own buffers for playback: no allocation per frame); the map goes with
-the table's last view. A file is never changed in
-place (it is replaced by a rename), so a map sees one whole file. A resumed bake checks the
-frames it keeps (prepare_resume) and refuses a groom whose rest positions moved since the bake
-started (the manifest keeps a hash of them).
+the table's last view. A file is never changed in place (it is replaced by a rename), so a map
+sees one whole file. A resumed bake checks the frames it keeps (prepare_resume) and refuses a
+groom whose rest positions moved since the bake started (the manifest keeps a hash of them).
 """
 import hashlib
 import json

@@ -6,14 +6,17 @@
 
 namespace hairdyn {
 
+/* One span's values of the table's rows `rows`; W > 0: its width, known here (a memcpy call
+ * per row was most of the time), 0: span.width. */
 template<int W>
 static void copy_rows(const float *table, const int64_t table_width, const ColumnSpan &span,
                       const IndexRange rows)
 {
+  const int64_t width = W > 0 ? W : span.width;
   for (int64_t row = rows.start; row < rows.one_after_last(); row++) {
     const float *from = table + row * table_width + span.start;
-    float *to = span.out + row * W;
-    for (int j = 0; j < W; j++) {
+    float *to = span.out + row * width;
+    for (int64_t j = 0; j < width; j++) {
       to[j] = from[j];
     }
   }
@@ -34,8 +37,7 @@ bool split_columns(const float *table, const int64_t rows, const int64_t table_w
           nonfinite |= uint32_t((bits & 0x7f800000u) == 0x7f800000u);
         }
         for (const ColumnSpan &span : columns) {
-          /* The widths attributes have (scalars and vectors) with the count known here: a
-           * call of memcpy per row was most of the time. */
+          /* The widths attributes have: scalars and vectors. */
           switch (span.width) {
             case 1:
               copy_rows<1>(table, table_width, span, range);
@@ -44,10 +46,7 @@ bool split_columns(const float *table, const int64_t rows, const int64_t table_w
               copy_rows<3>(table, table_width, span, range);
               break;
             default:
-              for (int64_t row = range.start; row < range.one_after_last(); row++) {
-                std::memcpy(span.out + row * span.width, table + row * table_width + span.start,
-                            size_t(span.width) * sizeof(float));
-              }
+              copy_rows<0>(table, table_width, span, range);
           }
         }
         return nonfinite == 0;

@@ -13,9 +13,10 @@ struct ColumnSpan {
   int64_t width;
 };
 
-/* Copies each span of the (rows, table_width) row-major table into its output, in one pass
- * over the table that also checks every value of it (those of no span too): returns whether
- * they are all finite. The outputs are filled either way. */
+/* Copies each span of the (rows, table_width) row-major table into its output and checks
+ * every value of the table (those of no span too), a block of rows at a time on the thread
+ * pool (each block read from memory once): returns whether they are all finite. The outputs
+ * are filled either way. */
 bool split_columns(const float *table, int64_t rows, int64_t table_width,
                    const std::vector<ColumnSpan> &columns);
 
