@@ -282,16 +282,21 @@ void StrandSolver::scatter_pass_view()
 void StrandSolver::group_strands()
 {
   /* Each strand joins the open group of its point count, in the order the strands come; a
-   * full group closes. The groups are the same whatever the thread count. */
+   * full group closes. Groups are as big as 16 a thread allow, within group_strands_min and
+   * group_strands_max; they change no strand's bits (each strand keeps the bits it has
+   * alone). */
   groups_.clear();
   std::unordered_map<int32_t, size_t> open; /* point count -> group */
   const bool masked = !stepped_.empty();
   const int64_t stepped_num = masked ? int64_t(stepped_curves_.size()) : curves_num();
+  grouped_for_threads_ = thread_num();
+  const int64_t group_size = std::clamp<int64_t>(stepped_num / (16 * grouped_for_threads_),
+                                                 group_strands_min, group_strands_max);
   for (int64_t index = 0; index < stepped_num; index++) {
     const int64_t curve = masked ? stepped_curves_[size_t(index)] : index;
     const int32_t points_num = curve_offsets_[size_t(curve + 1)] - curve_offsets_[size_t(curve)];
     auto [slot, fresh] = open.try_emplace(points_num, groups_.size());
-    if (fresh || groups_[slot->second].size == group_strands_max) {
+    if (fresh || groups_[slot->second].size == group_size) {
       slot->second = groups_.size();
       groups_.emplace_back();
     }
@@ -661,6 +666,9 @@ void StrandSolver::step(const float frame_dt, const mat4 &head_to_world)
   const HeadVelocity velocity = HeadVelocity::between(pose_, pose, frame_dt);
   HeadAcceleration head = HeadAcceleration::between(head_velocity_, velocity, frame_dt);
 
+  if (grouped_for_threads_ != thread_num()) {
+    group_strands();
+  }
   const int substeps_num = std::max(params_.substeps, 1);
   std::vector<Substep> substeps(static_cast<size_t>(substeps_num));
   for (int s = 0; s < substeps_num; s++) {

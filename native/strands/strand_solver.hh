@@ -421,9 +421,13 @@ class StrandSolver {
   std::vector<vec3> pins_rest_head_;
 
   /* Strands of one point count that advance a substep together, as many at a time as the
-   * vector code has lanes (chain_lanes.hh); the more there are, the fuller the vectors of
-   * those that cut their substeps into steps. */
+   * vector code has lanes (chain_lanes.hh); a group is one chunk of the parallel loop. The
+   * more a group holds, the fuller the vectors of its strands that cut their substeps into
+   * steps (with 32, 26% of the 8-lane steps of BM_StrandStep were part empty; with 128, 12%);
+   * at least 16 groups a thread keep the threads evenly loaded (group_strands). */
+  static constexpr int group_strands_min = 32;
   static constexpr int group_strands_max = 128;
+  int grouped_for_threads_ = 0; /* the thread count groups_ was made for */
   struct StrandGroup {
     int64_t curves[group_strands_max];
     int64_t size = 0;
