@@ -282,9 +282,9 @@ void StrandSolver::scatter_pass_view()
 void StrandSolver::group_strands()
 {
   /* Each strand joins the open group of its point count, in the order the strands come; a
-   * full group closes. Groups are as big as 16 a thread allow, within group_strands_min and
-   * group_strands_max; they change no strand's bits (each strand keeps the bits it has
-   * alone). */
+   * full group closes. A group holds the stepped strands / (16 × threads), within
+   * group_strands_min and group_strands_max: 16 groups for each thread. The groups change no
+   * strand's bits (each strand keeps the bits it has alone). */
   groups_.clear();
   std::unordered_map<int32_t, size_t> open; /* point count -> group */
   const bool masked = !stepped_.empty();
