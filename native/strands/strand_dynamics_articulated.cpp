@@ -686,7 +686,7 @@ template<int W>
       accelerations_[p] = q_acceleration;
       vec2 &omega = angular_velocities_[p];
       omega += h[lane] * q_acceleration;
-      if (hinge_runs_away(omega, rest_lengths_[p])) {
+      if (hinge_runs_away(omega, terms[i].d[lane])) { /* the rest length pass 1 read */
         r_outcomes[lane] = -1;
         lanes[lane] = false;
         break;
