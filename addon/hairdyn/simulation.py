@@ -100,7 +100,9 @@ class Simulation:
         except ValueError as error:
             raise HairdynError(f"'{hair_obj.name}': {error}") from None
         self.previous_positions = np.array(self.positions)
-        self.velocities = np.zeros_like(self.previous_positions)
+        self.velocities = np.empty_like(self.previous_positions)
+        self.tangents = np.empty_like(self.previous_positions)
+        self._measure(1.0)  # the rest frame: no velocity
         self.collision_ms = 0.0
 
     @property
@@ -120,18 +122,22 @@ class Simulation:
         start = time.perf_counter()
         self.method.step(frame_dt, head_matrix)
         elapsed_ms = (time.perf_counter() - start) * 1000.0
-        positions = self.positions
-        self.velocities = (positions - self.previous_positions) / np.float32(frame_dt)
-        self.previous_positions[:] = positions
+        self._measure(frame_dt)
         return elapsed_ms
 
-    def stretch(self):
-        return self.native.max_relative_stretch(
-            self.groom.curve_offsets, self.groom.positions_wo, self.positions
+    def _measure(self, frame_dt):
+        """What the reports and outputs take from the frame's positions, in one native pass
+        into the same arrays every frame: velocities, tangents, the count of points that are
+        not finite numbers, the stretch; previous_positions becomes the positions."""
+        self.nonfinite_num, self.stretch = self.native.strand_frame(
+            self.groom.curve_offsets,
+            self.groom.positions_wo,
+            self.positions,
+            self.previous_positions,
+            self.velocities,
+            self.tangents,
+            frame_dt,
         )
-
-    def nonfinite_points(self):
-        return self.native.count_nonfinite(self.positions)
 
     def penetration(self):
         """Exact penetration of the strands into the colliders' real triangles, or None."""
@@ -140,11 +146,10 @@ class Simulation:
         return self.colliders.penetration(self.positions, self.groom.curve_offsets)
 
     def strand_arrays(self):
-        positions = self.positions
         return {
-            "position": positions,
+            "position": self.positions,
             "velocity": self.velocities,
-            "direction": self.native.point_tangents(self.groom.curve_offsets, positions),
+            "direction": self.tangents,
             **self.method.strand_attributes(),
         }
 
@@ -169,7 +174,7 @@ class Simulation:
     def frame(self):
         """{stream name: (arrays, curve offsets or None, output)} of the current frame, what
         the cache stores and outputs.write shows. Never NaN: a broken frame raises instead."""
-        broken = self.nonfinite_points()
+        broken = self.nonfinite_num
         if broken:
             raise HairdynError(
                 f"The simulation of '{self.hair_obj.name}' produced {broken} "
@@ -297,10 +302,10 @@ class Runner:
         ms = self._step_frame()
         self.step_ms.append(ms)
         self.collision_ms.append(self.simulation.collision_ms)
-        if self.simulation.nonfinite_points():
+        if self.simulation.nonfinite_num:
             self.nan_frames += 1
             return frame, ms
-        stretch = self.simulation.stretch()
+        stretch = self.simulation.stretch
         self.stretch_max = max(self.stretch_max, stretch)
         penetration = self.simulation.penetration()
         if penetration is not None:

@@ -75,6 +75,15 @@ Span<vec3> as_float3_unchecked(const py::handle obj, const char *name)
   return Span<vec3>(static_cast<const vec3 *>(array.data()), array.shape(0));
 }
 
+MutableSpan<vec3> as_float3_for_write(const py::handle obj, const char *name, const bool finite)
+{
+  const Span<vec3> span = finite ? as_float3(obj, name) : as_float3_unchecked(obj, name);
+  if (!py::reinterpret_borrow<py::array>(obj).writeable()) {
+    fail(std::string(name) + " must be a writeable array (it is changed in place)");
+  }
+  return MutableSpan<vec3>(const_cast<vec3 *>(span.data()), span.size());
+}
+
 Span<float> as_float(const py::handle obj, const char *name)
 {
   const py::array array = check_array(obj, name, py::dtype::of<float>(), "float32", 0);

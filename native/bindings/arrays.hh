@@ -26,6 +26,8 @@ py::array check_array(py::handle obj, const char *name, const py::dtype &dtype,
 Span<vec3> as_float3(py::handle obj, const char *name);
 /* (N, 3) float32, values not checked (for outputs and for measuring broken states). */
 Span<vec3> as_float3_unchecked(py::handle obj, const char *name);
+/* (N, 3) float32, writeable: a buffer changed in place; all finite unless `finite` is false. */
+MutableSpan<vec3> as_float3_for_write(py::handle obj, const char *name, bool finite = true);
 /* (N, 3) int32. */
 Span<ivec3> as_int3(py::handle obj, const char *name);
 /* (N,) int32. */

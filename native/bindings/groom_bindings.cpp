@@ -55,24 +55,6 @@ void bind_groom(py::module_ &m)
       "Shortest segment a groom may have: a millionth of its bounding-box diagonal.");
 
   m.def(
-      "max_relative_stretch",
-      [](const py::handle curve_offsets, const py::handle rest_positions,
-         const py::handle positions) {
-        const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
-        const Span<vec3> rest = as_float3(rest_positions, "rest_positions");
-        const Span<vec3> now = as_float3_unchecked(positions, "positions");
-        check_strands(offsets, rest);
-        if (now.size() != rest.size()) {
-          fail("positions and rest_positions must have the same number of points");
-        }
-        py::gil_scoped_release release;
-        return max_relative_stretch(offsets, rest, now);
-      },
-      py::arg("curve_offsets"), py::arg("rest_positions"), py::arg("positions"),
-      "Largest relative change of a segment length (0 = no stretch; inf if a point is NaN or "
-      "a rest segment has no length).");
-
-  m.def(
       "point_tangents",
       [](const py::handle curve_offsets, const py::handle positions) {
         const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
@@ -89,11 +71,37 @@ void bind_groom(py::module_ &m)
       "last segment's; zero for a zero-length segment, NaN where a point is NaN).");
 
   m.def(
-      "count_nonfinite",
-      [](const py::handle positions) {
-        return count_nonfinite(as_float3_unchecked(positions, "positions"));
+      "strand_frame",
+      [](const py::handle curve_offsets, const py::handle rest_positions,
+         const py::handle positions, const py::handle previous_positions,
+         const py::handle r_velocities, const py::handle r_tangents, const float dt) {
+        const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
+        const Span<vec3> rest = as_float3(rest_positions, "rest_positions");
+        const Span<vec3> now = as_float3_unchecked(positions, "positions");
+        const MutableSpan<vec3> previous =
+            as_float3_for_write(previous_positions, "previous_positions", false);
+        const MutableSpan<vec3> velocities = as_float3_for_write(r_velocities, "velocities", false);
+        const MutableSpan<vec3> tangents = as_float3_for_write(r_tangents, "tangents", false);
+        check_strands(offsets, rest);
+        for (const int64_t size : {now.size(), previous.size(), velocities.size(), tangents.size()})
+        {
+          if (size != rest.size()) {
+            fail("every array must have one row per point of rest_positions");
+          }
+        }
+        if (!(dt > 0.0f && dt < INFINITY)) {
+          fail("dt must be a positive number of seconds");
+        }
+        py::gil_scoped_release release;
+        const StrandFrame frame =
+            strand_frame(offsets, rest, now, dt, previous, velocities, tangents);
+        return std::make_pair(frame.nonfinite, frame.stretch);
       },
-      py::arg("positions"), "Number of points with a NaN or infinite coordinate.");
+      py::arg("curve_offsets"), py::arg("rest_positions"), py::arg("positions"),
+      py::arg("previous_positions"), py::arg("velocities"), py::arg("tangents"), py::arg("dt"),
+      "One pass over a frame's strand positions, into writeable (N, 3) float32 arrays: "
+      "velocities = (positions - previous_positions) / dt, tangents = point_tangents, then "
+      "previous_positions = positions. Returns (count_nonfinite, max_relative_stretch).");
 
   m.def(
       "split_columns",

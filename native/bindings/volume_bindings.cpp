@@ -18,16 +18,6 @@ mat4 as_head(const py::handle obj, const char *name)
   return obj.is_none() ? mat4(1.0f) : as_matrix(obj, name);
 }
 
-/* (N, 3) float32, finite, writeable: a buffer the pass changes in place. */
-MutableSpan<vec3> as_float3_for_write(const py::handle obj, const char *name)
-{
-  const Span<vec3> span = as_float3(obj, name);
-  if (!py::reinterpret_borrow<py::array>(obj).writeable()) {
-    fail(std::string(name) + " must be a writeable array (it is changed in place)");
-  }
-  return MutableSpan<vec3>(const_cast<vec3 *>(span.data()), span.size());
-}
-
 /* A grid's vertex values as a numpy array indexed [i, j, k] (Fortran order: i varies fastest,
  * as the grid stores them), copied. */
 py::array grid_values(const GridFrame &grid, const Span<float> values)

@@ -4,45 +4,81 @@
 #include <cfloat>
 #include <cmath>
 
+#include "core/parallel.hh"
 #include "groom/groom.hh"
 
 namespace hairdyn {
 
+namespace {
+
+/* The extremes of (l / l_rest)² over segments, one division per segment and no square root
+ * in the loop (it vectorises): |l / l_rest − 1| is largest at one of them. */
+struct StretchExtremes {
+  float lowest = 1.0f, highest = 1.0f;
+  bool broken = false; /* a NaN or infinite ratio */
+
+  void add(const vec3 &rest, const vec3 &now)
+  {
+    const float ratio = glm::dot(now, now) / glm::dot(rest, rest);
+    broken |= !(ratio <= FLT_MAX);
+    lowest = std::min(lowest, ratio);
+    highest = std::max(highest, ratio);
+  }
+
+  void add(const StretchExtremes &other)
+  {
+    lowest = std::min(lowest, other.lowest);
+    highest = std::max(highest, other.highest);
+    broken |= other.broken;
+  }
+
+  float stretch() const
+  {
+    if (broken) {
+      return INFINITY; /* A NaN segment counts as broken, never as unstretched. */
+    }
+    return std::max(std::sqrt(highest) - 1.0f, 1.0f - std::sqrt(lowest));
+  }
+};
+
+/* The segments of `points` (one strand) into `extremes`. */
+inline void add_stretch(const IndexRange points, const Span<vec3> rest_positions,
+                        const Span<vec3> positions, StretchExtremes &extremes)
+{
+  for (int64_t i = points.start; i + 1 < points.one_after_last(); i++) {
+    extremes.add(rest_positions[i + 1] - rest_positions[i], positions[i + 1] - positions[i]);
+  }
+}
+
+/* point_tangents of one strand. */
+inline void strand_tangents(const IndexRange points, const Span<vec3> positions,
+                            const MutableSpan<vec3> r_tangents)
+{
+  const int64_t tip = points.one_after_last() - 1;
+  for (int64_t i = points.start; i < tip; i++) {
+    const vec3 forward = positions[i + 1] - positions[i];
+    r_tangents[i] = forward / std::max(std::sqrt(glm::dot(forward, forward)), 1e-30f);
+  }
+  r_tangents[tip] = r_tangents[tip - 1]; /* a tip takes its segment's direction */
+}
+
+}  // namespace
+
 float max_relative_stretch(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions,
                            const Span<vec3> positions)
 {
-  /* The extremes of (l / l_rest)², one division per segment and no square root in the loop
-   * (it vectorises): |l / l_rest − 1| is largest at one of them. */
-  float lowest = 1.0f, highest = 1.0f;
-  bool broken = false;
+  StretchExtremes extremes;
   for (int64_t curve = 0; curve + 1 < curve_offsets.size(); curve++) {
-    const IndexRange points = curve_points(curve_offsets, curve);
-    for (int64_t i = points.start; i + 1 < points.one_after_last(); i++) {
-      const vec3 rest = rest_positions[i + 1] - rest_positions[i];
-      const vec3 now = positions[i + 1] - positions[i];
-      const float ratio = glm::dot(now, now) / glm::dot(rest, rest);
-      broken |= !(ratio <= FLT_MAX); /* NaN or infinite */
-      lowest = std::min(lowest, ratio);
-      highest = std::max(highest, ratio);
-    }
+    add_stretch(curve_points(curve_offsets, curve), rest_positions, positions, extremes);
   }
-  if (broken) {
-    return INFINITY; /* A NaN segment counts as broken, never as unstretched. */
-  }
-  return std::max(std::sqrt(highest) - 1.0f, 1.0f - std::sqrt(lowest));
+  return extremes.stretch();
 }
 
 void point_tangents(const Span<int32_t> curve_offsets, const Span<vec3> positions,
                     const MutableSpan<vec3> r_tangents)
 {
   for (int64_t curve = 0; curve + 1 < curve_offsets.size(); curve++) {
-    const IndexRange points = curve_points(curve_offsets, curve);
-    const int64_t tip = points.one_after_last() - 1;
-    for (int64_t i = points.start; i < tip; i++) {
-      const vec3 forward = positions[i + 1] - positions[i];
-      r_tangents[i] = forward / std::max(std::sqrt(glm::dot(forward, forward)), 1e-30f);
-    }
-    r_tangents[tip] = r_tangents[tip - 1]; /* a tip takes its segment's direction */
+    strand_tangents(curve_points(curve_offsets, curve), positions, r_tangents);
   }
 }
 
@@ -53,6 +89,43 @@ int64_t count_nonfinite(const Span<vec3> positions)
     count += is_finite(p) ? 0 : 1;
   }
   return count;
+}
+
+StrandFrame strand_frame(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions,
+                         const Span<vec3> positions, const float dt,
+                         const MutableSpan<vec3> r_previous, const MutableSpan<vec3> r_velocities,
+                         const MutableSpan<vec3> r_tangents)
+{
+  struct Partial {
+    StretchExtremes extremes;
+    int64_t nonfinite = 0;
+  };
+  /* 4,096 strands a chunk: handing chunks to the pool cost 0.1 ms, more than the whole pass
+   * over 2,000 strands of 17 points (0.18 ms on one core). */
+  const Partial all = parallel_reduce(
+      curve_offsets.size() - 1, 4096, Partial(),
+      [&](const IndexRange curves) {
+        Partial partial;
+        for (int64_t curve = curves.start; curve < curves.one_after_last(); curve++) {
+          const IndexRange points = curve_points(curve_offsets, curve);
+          add_stretch(points, rest_positions, positions, partial.extremes);
+          strand_tangents(points, positions, r_tangents);
+        }
+        /* The points of those strands in one flat loop (it vectorises). */
+        for (int64_t i = curve_offsets[curves.start]; i < curve_offsets[curves.one_after_last()];
+             i++) {
+          partial.nonfinite += is_finite(positions[i]) ? 0 : 1;
+          r_velocities[i] = (positions[i] - r_previous[i]) / dt;
+          r_previous[i] = positions[i];
+        }
+        return partial;
+      },
+      [](Partial a, const Partial &b) {
+        a.extremes.add(b.extremes);
+        a.nonfinite += b.nonfinite;
+        return a;
+      });
+  return { all.nonfinite, all.extremes.stretch() };
 }
 
 }  // namespace hairdyn
