@@ -49,7 +49,8 @@
  * 2.1% with a predictor every step; test AChainTurningThroughTheChartsPolesKeepsItsEnergy).
  *
  * Contact: a segment whose tip ends a step inside a body turns about its root onto the
- * surface (Ward & Lin 2003 §5.5), its child keeping its direction, and the tip's velocity
+ * surface (Ward & Lin 2003 §5.5), its child keeping its direction (for up to max_kept_turn
+ * of the turn), and the tip's velocity
  * into the surface is stopped by an inelastic impulse through the chain's articulated
  * inertia (stop_at_contact). That never
  * adds energy; stopping the one hinge instead (Kurihara 1993's hinges, where each segment
@@ -701,10 +702,13 @@ template<int W>
    * Lin 2003 §5.5) on its own, the lanes' tips queried in one batch. The caller applies the
    * impulses that stop the projected tips' motion into the surfaces (scratch.stops).
    *
-   * A projected segment turns alone: its child keeps the direction it had (its hinge takes
-   * the turn back), so the strand beyond moves by the tip's small displacement instead of
-   * swinging about the projected segment's root. Swinging it, a strand lying on the head
-   * flicked its tip by millimetres at every projection and never came to rest. */
+   * A projected segment turns alone for up to max_kept_turn: its child keeps the direction it
+   * had (its hinge takes the turn back), so the strand beyond moves by the tip's small
+   * displacement instead of swinging about the projected segment's root. Swinging it, a
+   * strand lying on the head flicked its tip by millimetres at every projection and never
+   * came to rest. What a projection turns beyond max_kept_turn the child turns with it: the
+   * hinge taking back a larger turn stores it in its stiff spring, energy no motion paid for
+   * (see max_kept_turn). */
   M3<Floats> frame{};
   V3<Floats> node{};
   for (int lane = 0; lane < W; lane++) {
@@ -769,8 +773,9 @@ template<int W>
         put(tip, lane, lane_tip);
         if (i + 1 < n) {
           keep_direction[lane] = true;
-          kept_direction[lane] = Deflection(angles_[p + 1])
-                                     .rotate(unprojected * rest_rotations_[p + 1])[2];
+          kept_direction[lane] = turn_beyond(
+              Deflection(angles_[p + 1]).rotate(unprojected * rest_rotations_[p + 1])[2],
+              unprojected[2], projected[2], max_kept_turn);
         }
       }
       trig_[p] = deflection.trig();

@@ -218,6 +218,15 @@ class StrandSolver {
    * order) 0.3 keeps every test and the soak (a third of the steps: BM_StrandStep's
    * articulated frame 697 -> 320 ms on one core). */
   static constexpr float max_turn_per_step = 0.3f;
+  /* rad: the most of a contact projection's turn that the projected segment's child takes back
+   * in its hinge, keeping its direction (articulated model; the rest it turns with the
+   * segment). A strand resting on a body is projected by small turns, 99% of them under
+   * 0.15 rad in the soak of StrandsRobustness. A segment pushed out of a body it lies deep in
+   * (Sintel's strands along the bust) turns 0.3–1 rad; its child's stiff spring took that
+   * back as energy from nowhere, and 4 to 33 of the 9,120 strands of the bust scene ran away
+   * each frame (none over 24 frames with the cap, which also runs 3× faster: test
+   * NoStrandRunsAwayAlongSintelsBust). */
+  static constexpr float max_kept_turn = 0.2f;
   static constexpr int max_turn_steps = 1024;
 
   const glm::dvec3 &origin() const { return origin_wo_; }
