@@ -39,14 +39,19 @@
  *
  * q̈₀ comes from the last two steps: each step's q̈ is the chain's at its middle, so
  * q̈₀ ≈ (3/2) q̈₋₁ − (1/2) q̈₋₂ (Adams–Bashforth's two-step extrapolation, to the half step
- * beyond the last one). Where that trend is not there to be read, a predictor stage finds
+ * beyond the last one), but a component whose sign flipped between those two steps is held
+ * at q̈₋₁: the steps do not resolve an oscillation that fast, and extrapolating doubles it
+ * (±a gives ±2a). Extrapolated, free strands of Sintel's groom in wind ran away from rest
+ * (2 of 9,120 over 48 frames; test NoStrandRunsAwayAlongSintelsBust), their near-root hinges
+ * zigzagging ever faster. Where that trend is not there to be read, a predictor stage finds
  * q̈₀ by the same three passes at the step's start rates, and the step itself follows: for
  * the first two steps after a state is set or the strand is put at rest, after a pass
  * changed its rates (take_back_strand), and after contact impulses stopped it. A strand in
  * free motion takes one articulated-body pass per step instead of two (1.3× faster on
  * BM_StrandStep, 1.5× on the README's Blender bench). A free chain turning through the
- * charts' poles keeps its energy within 4.4% over 0.2 s at 128 and at 512 substeps (4.6% and
- * 2.1% with a predictor every step; test AChainTurningThroughTheChartsPolesKeepsItsEnergy).
+ * charts' poles keeps its energy within 1.2% and 3.5% over 0.2 s at 128 and at 512 substeps
+ * (5.7% and 6.8% extrapolated without the hold; 0.3% and 1.0% with a predictor every step;
+ * test AChainTurningThroughTheChartsPolesKeepsItsEnergy).
  *
  * Contact: a segment whose tip ends a step inside a body turns about its root onto the
  * surface (Ward & Lin 2003 §5.5), its child keeping its direction (for up to max_kept_turn
@@ -517,15 +522,20 @@ template<int W>
 [[gnu::always_inline]] inline void StrandSolver::mid_step_accelerations(
     const int64_t curve, const MutableSpan<vec2> r_accelerations) const
 {
-  /* The mid-step rates' q̈ (see the top): the last two steps' extrapolated, or zero for a
-   * predictor stage when they are not both known (a state was set, a pass's changes or
-   * contact impulses broke the trend). */
+  /* The mid-step rates' q̈ (see the top): the last two steps' extrapolated, a component that
+   * flipped its sign between them held, or zero for a predictor stage when they are not both
+   * known (a state was set, a pass's changes or contact impulses broke the trend). */
   const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
-  const bool known = accelerations_known_[size_t(curve)] == 2;
+  if (accelerations_known_[size_t(curve)] < 2) {
+    std::fill(r_accelerations.begin(), r_accelerations.end(), vec2(0.0f));
+    return;
+  }
   for (int64_t i = 0; i < r_accelerations.size(); i++) {
-    r_accelerations[i] = known ? 1.5f * accelerations_[first + size_t(i)] -
-                                     0.5f * earlier_accelerations_[first + size_t(i)] :
-                                 vec2(0.0f);
+    const vec2 last = accelerations_[first + size_t(i)];
+    const vec2 earlier = earlier_accelerations_[first + size_t(i)];
+    const vec2 trend = 1.5f * last - 0.5f * earlier;
+    r_accelerations[i] = vec2(last.x * earlier.x < 0.0f ? last.x : trend.x,
+                              last.y * earlier.y < 0.0f ? last.y : trend.y);
   }
 }
 
