@@ -43,11 +43,8 @@
  * at q̈₋₁: the steps do not resolve an oscillation that fast, and extrapolating doubles it
  * (±a gives ±2a). Extrapolated, free strands of Sintel's groom in wind ran away from rest
  * (2 of 9,120 over 48 frames; test NoStrandRunsAwayAlongSintelsBust), their near-root hinges
- * zigzagging ever faster. (BM_StrandStep takes 9% longer with the hold, in 7% fewer steps;
- * the same hold rounded differently takes no longer than without it: that benchmark's cost
- * follows its strands' chaotic trajectories.) Where that trend is not there to be read, a
- * predictor stage finds q̈₀ by the same three passes at the step's start rates, and the step
- * itself follows: for
+ * zigzagging ever faster. Where that trend is not there to be read, a predictor stage finds
+ * q̈₀ by the same three passes at the step's start rates, and the step itself follows: for
  * the first two steps after a state is set or the strand is put at rest, after a pass
  * changed its rates (take_back_strand), and after contact impulses stopped it. A strand in
  * free motion takes one articulated-body pass per step instead of two (1.3× faster on
@@ -522,6 +519,24 @@ template<int W>
   }
 }
 
+/* `last` where `last` and `earlier` have opposite signs (their product's sign bit), else
+ * `trend`: selected by bits, with no branch, which the flips' random signs mispredicted (as a
+ * branch, or the compares GCC makes one, it cost 9% of BM_StrandStep). */
+[[gnu::always_inline]] inline float held_if_flipped(const float last, const float earlier,
+                                                    const float trend)
+{
+  uint32_t product, held, extrapolated;
+  const float p = last * earlier;
+  std::memcpy(&product, &p, sizeof(float));
+  std::memcpy(&held, &last, sizeof(float));
+  std::memcpy(&extrapolated, &trend, sizeof(float));
+  const uint32_t flipped = uint32_t(int32_t(product) >> 31); /* all ones where negative */
+  const uint32_t bits = (held & flipped) | (extrapolated & ~flipped);
+  float result;
+  std::memcpy(&result, &bits, sizeof(float));
+  return result;
+}
+
 [[gnu::always_inline]] inline void StrandSolver::mid_step_accelerations(
     const int64_t curve, const MutableSpan<vec2> r_accelerations) const
 {
@@ -537,8 +552,8 @@ template<int W>
     const vec2 last = accelerations_[first + size_t(i)];
     const vec2 earlier = earlier_accelerations_[first + size_t(i)];
     const vec2 trend = 1.5f * last - 0.5f * earlier;
-    r_accelerations[i] = vec2(last.x * earlier.x < 0.0f ? last.x : trend.x,
-                              last.y * earlier.y < 0.0f ? last.y : trend.y);
+    r_accelerations[i] = vec2(held_if_flipped(last.x, earlier.x, trend.x),
+                              held_if_flipped(last.y, earlier.y, trend.y));
   }
 }
 
