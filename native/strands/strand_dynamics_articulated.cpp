@@ -55,12 +55,11 @@
  *
  * Contact: a segment whose tip ends a step inside a body turns about its root onto the
  * surface (Ward & Lin 2003 §5.5), its child keeping its direction (for up to max_kept_turn
- * of the turn), and the tip's velocity
- * into the surface is stopped by an inelastic impulse through the chain's articulated
- * inertia (stop_at_contact). That never
- * adds energy; stopping the one hinge instead (Kurihara 1993's hinges, where each segment
- * moves on its own) changes the generalised momentum of everything distal to it, and fed a
- * whipping chain energy until it ran away.
+ * of the turn), and the tip's velocity into the surface is stopped by an inelastic impulse
+ * through the chain's articulated inertia (stop_at_contact). That never adds energy;
+ * stopping the one hinge instead (Kurihara 1993's hinges, where each segment moves on its
+ * own) changes the generalised momentum of everything distal to it, and fed a whipping chain
+ * energy until it ran away.
  *
  * Strands of one point count step W at a time (StrandSolver::group_strands; W = 8 with
  * AVX-512, 4 otherwise): pass 1 (the shape and forces) in vectors of W floats, the tips'
