@@ -573,7 +573,7 @@ TEST(StrandsArticulated, AChainTurningThroughTheChartsPolesKeepsItsEnergy)
    * With the velocity products at the start of the step (explicit Euler) the energy grew in
    * proportion to the step: +67% at 128 substeps, +26% at 512, +7% at 2048 by the end. At
    * mid-step (the model's explicit midpoint) it ends within 1.2% and 3.5% at 128 and 512
-   * (5.7% and 6.8% before the mid-step trend held the components that flip their sign); what
+   * (6.8% and 5.7% before the mid-step trend held the components that flip their sign); what
    * is left does not shrink with the step (the node velocities measure it, and the chain's
    * spin about its own axes, see axial_inertia_share, is not in them). */
   std::vector<int32_t> offsets{ 0, 13 };

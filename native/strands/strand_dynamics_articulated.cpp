@@ -50,7 +50,7 @@
  * free motion takes one articulated-body pass per step instead of two (1.3× faster on
  * BM_StrandStep, 1.5× on the README's Blender bench). A free chain turning through the
  * charts' poles keeps its energy within 1.2% and 3.5% over 0.2 s at 128 and at 512 substeps
- * (5.7% and 6.8% extrapolated without the hold; 0.3% and 1.0% with a predictor every step;
+ * (6.8% and 5.7% extrapolated without the hold; 0.3% and 1.0% with a predictor every step;
  * test AChainTurningThroughTheChartsPolesKeepsItsEnergy).
  *
  * Contact: a segment whose tip ends a step inside a body turns about its root onto the
