@@ -49,6 +49,13 @@ inline float atan2_fast(const float y, const float x)
   return std::copysign(r, y);
 }
 
+/* v turned by `angle` (rad, right hand) about the unit vector `axis` (Rodrigues' formula). */
+inline vec3 rotate_about_axis(const vec3 &v, const vec3 &axis, const float angle)
+{
+  const float c = std::cos(angle), s = std::sin(angle);
+  return c * v + s * glm::cross(axis, v) + (1.0f - c) * glm::dot(axis, v) * axis;
+}
+
 inline bool is_finite(const vec3 &v)
 {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);

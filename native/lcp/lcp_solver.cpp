@@ -18,10 +18,7 @@ static vec3 rotate_about(const vec3 &v, const vec3 &omega, const float scale)
   if (!(rate > 0.0f)) {
     return v;
   }
-  const vec3 axis = omega / rate;
-  const float angle = rate * scale;
-  const float c = std::cos(angle), sn = std::sin(angle);
-  return c * v + sn * glm::cross(axis, v) + (1.0f - c) * glm::dot(axis, v) * axis;
+  return rotate_about_axis(v, omega / rate, rate * scale);
 }
 
 vec3 LcpSolver::transport_head(const HeadState &head, const vec3 &x)

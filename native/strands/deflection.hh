@@ -82,8 +82,7 @@ struct Deflection {
 };
 
 /* `direction` turned about from × to by the part beyond `kept` radians of the turn that takes
- * the unit vector `from` to the unit vector `to` (Rodrigues' formula); unchanged when that turn
- * is within `kept`. */
+ * the unit vector `from` to the unit vector `to`; unchanged when that turn is within `kept`. */
 inline vec3 turn_beyond(const vec3 &direction, const vec3 &from, const vec3 &to, const float kept)
 {
   const vec3 axis = glm::cross(from, to);
@@ -92,9 +91,7 @@ inline vec3 turn_beyond(const vec3 &direction, const vec3 &from, const vec3 &to,
   if (!(beyond > 0.0f && sin_turn > 0.0f)) {
     return direction;
   }
-  const vec3 k = axis / sin_turn;
-  const float s = std::sin(beyond), c = std::cos(beyond);
-  return direction * c + glm::cross(k, direction) * s + k * (glm::dot(k, direction) * (1.0f - c));
+  return rotate_about_axis(direction, axis / sin_turn, beyond);
 }
 
 /* `angle` plus the multiple of 2π that brings it nearest `near`. */
