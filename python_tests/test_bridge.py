@@ -174,6 +174,32 @@ def test_write_back_is_visible_in_the_depsgraph(open_fixture):
     assert np.allclose(np.linalg.norm(direction, axis=1), 1.0, atol=1e-6)
 
 
+def test_written_positions_move_the_evaluated_bounds(open_fixture):
+    """The outputs' bounds (which Blender culls, shadows and frames by) follow every frame's
+    positions, not the first frame's: positions written through foreach_set alone leave the
+    bounds Blender caches untouched (Blender 5.0: both outputs; 5.2: curves whose only write is
+    the positions)."""
+    open_fixture("head_curves.blend")
+    hair = bpy.data.objects["Hair"]
+    groom = bridge.read_curves(hair, depsgraph())
+    curves_out = bridge.ensure_curves_output(None, "Out", groom.curve_offsets)
+    points_out = bridge.ensure_points_output(None, "OutPoints")
+    for shift in (0.0, 0.5, -0.25):
+        positions = groom.positions_wo + np.float32(shift)
+        bridge.write_curves(curves_out, positions)
+        bridge.write_points(points_out, positions)
+        graph = depsgraph()
+        for output in (curves_out, points_out):
+            corners = np.array([tuple(c) for c in output.evaluated_get(graph).bound_box])
+            low, high = positions.min(axis=0), positions.max(axis=0)
+            # Curves: the evaluated (smooth) curves pass through every written point.
+            assert np.all(corners.min(axis=0) <= low + 1e-5), (output.type, shift)
+            assert np.all(corners.max(axis=0) >= high - 1e-5), (output.type, shift)
+            if output.type == 'MESH':
+                assert np.allclose(corners.min(axis=0), low) and np.allclose(
+                    corners.max(axis=0), high), shift
+
+
 def test_arrays_cross_without_copies(open_fixture):
     open_fixture("head_curves.blend")
     hair = bpy.data.objects["Hair"]

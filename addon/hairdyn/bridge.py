@@ -481,7 +481,30 @@ def write_curves(obj, positions_wo):
         raise HairdynError(f"'{obj.name}' has {len(curves.points)} points, the simulation "
                            f"{len(positions_wo)}")
     curves.position_data.foreach_set("vector", np.ascontiguousarray(positions_wo).ravel())
+    _tag_positions_changed(curves)
     curves.update_tag()
+
+
+_CURVE_TYPES = ('CATMULL_ROM', 'POLY')  # the "curve_type" values 0 and 1 (CurveType)
+
+
+def _tag_positions_changed(curves):
+    """Tell Blender that the positions changed, so that it recomputes what it caches from them
+    (the bounds it culls, shadows and frames the object by; the evaluated curves).
+
+    foreach_set writes the array behind Blender's back, and where copies share those caches
+    (Blender 5.x) the evaluated object keeps the first frame's bounds. Python has no call for
+    "positions changed"; setting the first curve's type to the type it has tags the whole
+    geometry changed, the only tag reachable from Python that does. Blender then finds the
+    bounds from the evaluated curves, at its own cost (1.3 ms for 34,000 Catmull-Rom points).
+    Blender 3.x (no Curves.set_types) copies no caches. Bézier and NURBS curves, which hairdyn
+    never makes, are left alone: setting their type could move their handles."""
+    if not hasattr(curves, "set_types") or not len(curves.curves):
+        return
+    attribute = curves.attributes.get("curve_type")
+    curve_type = 0 if attribute is None else attribute.data[0].value
+    if curve_type < len(_CURVE_TYPES):
+        curves.set_types(type=_CURVE_TYPES[curve_type], indices=[0])
 
 
 def ensure_points_output(obj, name, like=None):
@@ -514,6 +537,10 @@ def write_points(obj, positions_wo, attributes=None):
         # MeshVertex.co there is a proxy that Blender sets one vertex at a time, 600 times
         # slower (65 ms for 170,000 vertices on bpy 5.0).
         attribute.data.foreach_set("vector", positions.ravel())
+        if count:
+            # foreach_set leaves the bounds Blender caches as they were (Blender 5.0); one
+            # vertex set through MeshVertex.co tags the positions changed.
+            mesh.vertices[0].co = mesh.vertices[0].co
         if not getattr(mesh, "use_auto_texspace", True):  # a file last played by Blender 3.4
             mesh.use_auto_texspace = True
     else:
