@@ -200,6 +200,55 @@ def test_written_positions_move_the_evaluated_bounds(open_fixture):
                     corners.max(axis=0), high), shift
 
 
+def _evaluated_points_node_group():
+    """Geometry nodes: the curves' evaluated points (Catmull-Rom, at their resolution) as the
+    vertices of a mesh, as a modifier downstream of the output would see them."""
+    group = bpy.data.node_groups.new("EvaluatedPoints", 'GeometryNodeTree')
+    if hasattr(group, "interface"):  # Blender 4.0 and later
+        group.interface.new_socket("Geometry", in_out='INPUT', socket_type='NodeSocketGeometry')
+        group.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
+    else:
+        group.inputs.new('NodeSocketGeometry', "Geometry")
+        group.outputs.new('NodeSocketGeometry', "Geometry")
+    inputs = group.nodes.new("NodeGroupInput")
+    outputs = group.nodes.new("NodeGroupOutput")
+    to_points = group.nodes.new("GeometryNodeCurveToPoints")
+    to_points.mode = 'EVALUATED'
+    to_vertices = group.nodes.new("GeometryNodePointsToVertices")
+    group.links.new(inputs.outputs[0], to_points.inputs[0])
+    group.links.new(to_points.outputs[0], to_vertices.inputs[0])
+    group.links.new(to_vertices.outputs[0], outputs.inputs[0])
+    return group
+
+
+def test_written_positions_reach_the_evaluated_curves(open_fixture):
+    """What Blender evaluates from the output curves (the smooth curves a geometry-nodes
+    modifier or the viewport takes) follows every frame's positions: without the tag, Blender
+    5.x kept evaluating the first frame's curves."""
+    open_fixture("head_curves.blend")
+    hair = bpy.data.objects["Hair"]
+    groom = bridge.read_curves(hair, depsgraph())
+    curves_out = bridge.ensure_curves_output(None, "Out", groom.curve_offsets)
+    curves_out.modifiers.new("EvaluatedPoints", 'NODES').node_group = _evaluated_points_node_group()
+    for shift in (0.0, 0.5):
+        positions = groom.positions_wo + np.float32(shift)
+        bridge.write_curves(curves_out, positions)
+        graph = depsgraph()
+        meshes = [
+            instance.object.data
+            for instance in graph.object_instances
+            if instance.object.original == curves_out
+            and isinstance(instance.object.data, bpy.types.Mesh)
+        ]
+        assert len(meshes) == 1 and len(meshes[0].vertices) >= len(positions)
+        evaluated = np.empty(3 * len(meshes[0].vertices), np.float32)
+        meshes[0].vertices.foreach_get("co", evaluated)
+        evaluated = evaluated.reshape(-1, 3)
+        # The evaluated curves pass through the written points and stay near them.
+        assert np.allclose(evaluated.max(axis=0), positions.max(axis=0), atol=0.02), shift
+        assert np.allclose(evaluated.min(axis=0), positions.min(axis=0), atol=0.02), shift
+
+
 def test_arrays_cross_without_copies(open_fixture):
     open_fixture("head_curves.blend")
     hair = bpy.data.objects["Hair"]
