@@ -52,16 +52,18 @@ TEST(LcpSprings, ConnectionsAreAlignedPrunedAndOriented)
 {
   const float a = 0.01f;
   const Block block = hair_block(a);
-  const LcpConnections c = build_connections(block.positions, block.directions, block.is_root,
-                                             1.3f * a, 0.5f, 12);
+  const LcpConnections c =
+      build_connections(block.positions, block.directions, block.is_root, 1.3f * a, 0.5f, 12);
   ASSERT_GT(c.size(), 0);
   std::vector<int> degree(block.positions.size(), 0);
   for (int64_t p = 0; p < c.size(); p++) {
-    const vec3 x = block.positions[size_t(c.tip[size_t(p)])] - block.positions[size_t(c.root[size_t(p)])];
+    const vec3 x =
+        block.positions[size_t(c.tip[size_t(p)])] - block.positions[size_t(c.root[size_t(p)])];
     EXPECT_GT(x.z, 0.0f) << "tip end must be nearer the hair tip";
     EXPECT_LT(glm::length(x), 2.0f * 1.3f * a);
     EXPECT_GE(c.strength[size_t(p)] / c.rest_length[size_t(p)], 0.5f - 1e-6f); /* a_ij ≥ a₀. */
-    EXPECT_FALSE(block.is_root[size_t(c.root[size_t(p)])] && block.is_root[size_t(c.tip[size_t(p)])]);
+    EXPECT_FALSE(block.is_root[size_t(c.root[size_t(p)])] &&
+                 block.is_root[size_t(c.tip[size_t(p)])]);
     degree[size_t(c.root[size_t(p)])]++;
     degree[size_t(c.tip[size_t(p)])]++;
   }
@@ -77,14 +79,14 @@ TEST(LcpSprings, AlphaKeepsYoungsModulusConstantAsPairsMoveApart)
 {
   const float a = 0.01f, h1 = 1.3f * a, E = 1e4f;
   const Block block = hair_block(a);
-  const LcpConnections c = build_connections(block.positions, block.directions, block.is_root,
-                                             h1, 0.5f, 12);
+  const LcpConnections c =
+      build_connections(block.positions, block.directions, block.is_root, h1, 0.5f, 12);
   const int64_t n = int64_t(block.positions.size());
   const std::vector<float> area(size_t(n), cross_section(1e-5f, 1300.0f));
   std::vector<float> k(size_t(c.size())), alpha_k(size_t(c.size())), sums(size_t(2 * n));
   std::vector<float> e_root(static_cast<size_t>(n)), e_tip(static_cast<size_t>(n));
   std::vector<float> rest_alpha;
-  for (const float stretch : {1.0f, 1.2f, 1.4f, 1.6f, 1.8f}) {
+  for (const float stretch : { 1.0f, 1.2f, 1.4f, 1.6f, 1.8f }) {
     /* Pull the block apart along and across the hair: every pair weakens (eq. 7). */
     std::vector<vec3> moved(block.positions);
     for (vec3 &p : moved) {
@@ -102,7 +104,8 @@ TEST(LcpSprings, AlphaKeepsYoungsModulusConstantAsPairsMoveApart)
     for (int64_t p = 0; p < c.size(); p++) {
       unscaled[size_t(p)] = rest_alpha[size_t(p)] * k[size_t(p)];
     }
-    std::vector<float> e_root_unscaled(static_cast<size_t>(n)), e_tip_unscaled(static_cast<size_t>(n));
+    std::vector<float> e_root_unscaled(static_cast<size_t>(n)),
+        e_tip_unscaled(static_cast<size_t>(n));
     compute_tensile_moduli(c, unscaled, area, e_root_unscaled, e_tip_unscaled);
     double worst = 0.0, mean_deviation = 0.0, worst_eq13 = 0.0, unscaled_mean = 0.0;
     int interior = 0;
@@ -121,7 +124,8 @@ TEST(LcpSprings, AlphaKeepsYoungsModulusConstantAsPairsMoveApart)
       for (int side = 0; side < 2; side++) {
         const float sum_lk = sums[size_t(2 * i + side)];
         const float alpha = E * area[size_t(i)] / sum_lk;
-        worst_eq13 = std::max(worst_eq13, double(std::abs(alpha * sum_lk / area[size_t(i)] / E - 1.0f)));
+        worst_eq13 =
+            std::max(worst_eq13, double(std::abs(alpha * sum_lk / area[size_t(i)] / E - 1.0f)));
       }
       unscaled_mean += double(e_root_unscaled[size_t(i)] / E);
     }
@@ -143,8 +147,8 @@ TEST(LcpSprings, DirectionsFollowTheConnections)
 {
   const float a = 0.01f;
   const Block block = hair_block(a);
-  const LcpConnections c = build_connections(block.positions, block.directions, block.is_root,
-                                             1.3f * a, 0.5f, 12);
+  const LcpConnections c =
+      build_connections(block.positions, block.directions, block.is_root, 1.3f * a, 0.5f, 12);
   const int64_t n = int64_t(block.positions.size());
   /* Rotate the whole block by 0.5 rad about X: eq. 15 turns every free direction with it. */
   const mat3 turn = glm::mat3_cast(glm::angleAxis(0.5f, vec3(1.0f, 0.0f, 0.0f)));
@@ -193,8 +197,8 @@ Chain hanging_chain(const int n, const float a, const float mass)
     chain.is_fixed.push_back(i == 0 ? 1 : 0);
     chain.masses.push_back(mass);
   }
-  chain.connections = build_connections(chain.positions, chain.directions, chain.is_fixed,
-                                        0.75f * a, 0.5f, 12);
+  chain.connections =
+      build_connections(chain.positions, chain.directions, chain.is_fixed, 0.75f * a, 0.5f, 12);
   return chain;
 }
 
@@ -217,9 +221,9 @@ TEST(LcpImplicitSprings, HangingChainReachesItsStaticStretchAtAHugeTimeStep)
     for (int i = 1; i <= n; i++) {
       chain.velocities[size_t(i)].z -= dt * g; /* gravity, explicit */
     }
-    const ImplicitSprings::Result result = springs.step(
-        chain.connections, chain.positions, alpha_k, 0.005f, chain.masses, chain.is_fixed, dt, nullptr,
-        chain.velocities);
+    const ImplicitSprings::Result result =
+        springs.step(chain.connections, chain.positions, alpha_k, 0.005f, chain.masses,
+                     chain.is_fixed, dt, nullptr, chain.velocities);
     ASSERT_LE(result.iterations, 100);
     for (int i = 0; i <= n; i++) {
       chain.positions[size_t(i)] += dt * chain.velocities[size_t(i)];
@@ -244,7 +248,7 @@ TEST(LcpImplicitSprings, EnergyNeverGrows)
   Chain chain = hanging_chain(n, a, mass);
   const std::vector<float> alpha_k(size_t(chain.connections.size()), kappa);
   for (int i = 1; i <= n; i++) {
-    chain.positions[size_t(i)] *= 1.3f; /* stretched by 30 % */
+    chain.positions[size_t(i)] *= 1.3f;                    /* stretched by 30 % */
     chain.positions[size_t(i)].x += 0.002f * float(i % 2); /* and bent */
   }
   const auto energy = [&]() {
@@ -256,17 +260,18 @@ TEST(LcpImplicitSprings, EnergyNeverGrows)
       e += 0.5 * double(kappa) * double(stretch) * double(stretch);
     }
     for (int i = 0; i <= n; i++) {
-      e += 0.5 * double(mass) * double(glm::dot(chain.velocities[size_t(i)], chain.velocities[size_t(i)]));
+      e += 0.5 * double(mass) *
+           double(glm::dot(chain.velocities[size_t(i)], chain.velocities[size_t(i)]));
     }
     return e;
   };
   ImplicitSprings springs;
-  for (const float dt : {1e-4f, 1e-2f}) {
+  for (const float dt : { 1e-4f, 1e-2f }) {
     double previous = energy();
     const double start = previous;
     for (int step = 0; step < 50; step++) {
-      springs.step(chain.connections, chain.positions, alpha_k, 0.0f, chain.masses,
-                   chain.is_fixed, dt, nullptr, chain.velocities);
+      springs.step(chain.connections, chain.positions, alpha_k, 0.0f, chain.masses, chain.is_fixed,
+                   dt, nullptr, chain.velocities);
       for (int i = 0; i <= n; i++) {
         chain.positions[size_t(i)] += dt * chain.velocities[size_t(i)];
       }
