@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
 
 #include "core/parallel.hh"
 
@@ -72,6 +76,172 @@ double ImplicitSprings::multiply_dot(const Span<vec3> d, const MutableSpan<vec3>
     }
     return dot;
   });
+}
+
+void ImplicitSprings::build_groups(const Span<vec3> positions)
+{
+  const int64_t n = positions.size();
+  group_.assign(size_t(n), -1);
+  groups_num_ = 0;
+  vec3 lo(std::numeric_limits<float>::max());
+  for (int64_t i = 0; i < n; i++) {
+    if (!is_fixed_[i]) {
+      lo = glm::min(lo, positions[i]);
+    }
+  }
+  if (group_cell <= 0.0f || lo.x == std::numeric_limits<float>::max()) {
+    return;
+  }
+  /* The occupied cells of the grid, in the order of their keys; the cell grows until they
+   * are few enough for a dense factorisation. */
+  float cell = group_cell;
+  const auto key_of = [&](const vec3 &p) {
+    uint64_t key = 0;
+    for (int a = 0; a < 3; a++) {
+      const float c = (p[a] - lo[a]) / cell; /* not a number: cell 0 */
+      key |= uint64_t(c >= 0.0f ? std::min(c, 2097151.0f) : 0.0f) << (21 * a);
+    }
+    return key;
+  };
+  for (;;) {
+    group_keys_.clear();
+    for (int64_t i = 0; i < n; i++) {
+      if (!is_fixed_[i]) {
+        group_keys_.push_back(key_of(positions[i]));
+      }
+    }
+    std::sort(group_keys_.begin(), group_keys_.end());
+    group_keys_.erase(std::unique(group_keys_.begin(), group_keys_.end()), group_keys_.end());
+    if (int64_t(group_keys_.size()) <= std::max(max_groups, 1)) {
+      break;
+    }
+    cell *= 1.25f;
+  }
+  groups_num_ = int64_t(group_keys_.size());
+  for (int64_t i = 0; i < n; i++) {
+    if (!is_fixed_[i]) {
+      group_[size_t(i)] =
+          int32_t(std::lower_bound(group_keys_.begin(), group_keys_.end(), key_of(positions[i])) -
+                  group_keys_.begin());
+    }
+  }
+}
+
+void ImplicitSprings::factor_coarse()
+{
+  const int64_t size = 3 * groups_num_;
+  coarse_.assign(size_t(size * size), 0.0);
+  /* A_c[a][b] += B (3 × 3 blocks of the column-major matrix). */
+  const auto add = [&](const int32_t a, const int32_t b, const mat3 &block) {
+    for (int c = 0; c < 3; c++) {
+      double *column = coarse_.data() + (3 * int64_t(b) + c) * size + 3 * int64_t(a);
+      for (int r = 0; r < 3; r++) {
+        column[r] += double(block[c][r]);
+      }
+    }
+  };
+  const int64_t n = int64_t(group_.size());
+  const float dt2 = dt_ * dt_;
+  const std::vector<int32_t> &offsets = connections_->particle_offsets;
+  /* A pair block B in row i, B (d_i − d_j): Qᵀ A Q's blocks [g_i][g_i] += B and
+   * [g_i][g_j] −= B, which cancel within a group (most pairs: a group holds hundreds of
+   * particles). A fixed partner has no unknown: the first only. */
+  const auto add_pair = [&](const int32_t a, const int32_t partner, const mat3 &block) {
+    const int32_t b = group_[size_t(partner)];
+    if (b != a) {
+      add(a, a, block);
+      if (b >= 0) {
+        add(a, b, -block);
+      }
+    }
+  };
+  for (int64_t i = 0; i < n; i++) {
+    const int32_t a = group_[size_t(i)];
+    if (a < 0) {
+      continue;
+    }
+    add(a, a, mat3(masses_[i]));
+    for (int32_t k = offsets[size_t(i)]; k < offsets[size_t(i) + 1]; k++) {
+      const Entry &e = entries_[size_t(k)];
+      if (group_[size_t(e.partner)] != a) {
+        add_pair(a, e.partner, e.along * glm::outerProduct(e.axis, e.axis) + mat3(e.across));
+      }
+    }
+    if (pressure_ != nullptr) {
+      for (int32_t k = pressure_->offsets[size_t(i)]; k < pressure_->offsets[size_t(i) + 1]; k++) {
+        const DensityJacobian::Entry &e = pressure_->entries[size_t(k)];
+        if (group_[size_t(e.partner)] != a) {
+          add_pair(a, e.partner,
+                   dt2 * (e.along * glm::outerProduct(e.gradient, e.gradient) + mat3(e.across)));
+        }
+      }
+    }
+  }
+  if (pressure_ != nullptr) {
+    /* Jᵀ κ J: Σ_k κ_k u_k u_kᵀ with u_k = (J Q)_k, row k of J summed over each group:
+     * g_kj at k's group and −g_kj at j's, for each neighbour j in another group (within a
+     * group the two cancel). */
+    std::vector<std::pair<int32_t, vec3>> u;
+    const auto push = [&](const int32_t group, const vec3 &value) {
+      if (group < 0) {
+        return;
+      }
+      for (std::pair<int32_t, vec3> &slot : u) {
+        if (slot.first == group) {
+          slot.second += value;
+          return;
+        }
+      }
+      u.emplace_back(group, value);
+    };
+    for (int64_t k = 0; k < n; k++) {
+      u.clear();
+      const int32_t a = group_[size_t(k)];
+      for (int32_t e = pressure_->offsets[size_t(k)]; e < pressure_->offsets[size_t(k) + 1]; e++) {
+        const DensityJacobian::Entry &entry = pressure_->entries[size_t(e)];
+        const int32_t b = group_[size_t(entry.partner)];
+        if (b != a) {
+          push(a, entry.gradient);
+          push(b, -entry.gradient);
+        }
+      }
+      const float scale = dt2 * pressure_->kappa[size_t(k)];
+      for (const std::pair<int32_t, vec3> &b : u) {
+        for (const std::pair<int32_t, vec3> &c : u) {
+          add(b.first, c.first, scale * glm::outerProduct(b.second, c.second));
+        }
+      }
+    }
+  }
+  Eigen::Map<Eigen::MatrixXd> matrix(coarse_.data(), size, size);
+  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> cholesky(matrix);
+  if (cholesky.info() != Eigen::Success) {
+    groups_num_ = 0; /* not positive definite in double: block-Jacobi alone */
+  }
+  coarse_rhs_.resize(size_t(size));
+  coarse_correction_.resize(size_t(groups_num_));
+}
+
+void ImplicitSprings::solve_coarse(const Span<vec3> residual)
+{
+  std::fill(coarse_rhs_.begin(), coarse_rhs_.end(), 0.0);
+  for (int64_t i = 0; i < residual.size(); i++) {
+    const int32_t a = group_[size_t(i)];
+    if (a >= 0) {
+      for (int c = 0; c < 3; c++) {
+        coarse_rhs_[size_t(3 * a + c)] += double(residual[i][c]);
+      }
+    }
+  }
+  const int64_t size = 3 * groups_num_;
+  const Eigen::Map<const Eigen::MatrixXd> factor(coarse_.data(), size, size);
+  Eigen::Map<Eigen::VectorXd> x(coarse_rhs_.data(), size);
+  factor.triangularView<Eigen::Lower>().solveInPlace(x);
+  factor.triangularView<Eigen::Lower>().adjoint().solveInPlace(x);
+  for (int64_t a = 0; a < groups_num_; a++) {
+    coarse_correction_[size_t(a)] =
+        vec3(float(x[3 * a]), float(x[3 * a + 1]), float(x[3 * a + 2]));
+  }
 }
 
 ImplicitSprings::Result ImplicitSprings::step(
@@ -184,12 +354,12 @@ ImplicitSprings::Result ImplicitSprings::step(
    * preconditioned residual, a velocity correction, exceeds the tolerance. */
   struct Residual {
     double rz = 0.0;          /* rᵀ P⁻¹ r */
-    float max_correction = 0; /* max_i ‖P_i⁻¹ r_i‖ */
+    float max_correction = 0; /* max_i ‖D_i⁻¹ r_i‖, the block-Jacobi part */
   };
   const auto combine = [](const Residual &a, const Residual &b) {
     return Residual{ a.rz + b.rz, std::max(a.max_correction, b.max_correction) };
   };
-  /* r_i −= alpha q_i, z_i = P_i⁻¹ r_i, and the sums. */
+  /* r_i −= alpha q_i, z_i = D_i⁻¹ r_i, and the sums. */
   const auto update_residual = [&](const IndexRange range, const float alpha) {
     Residual sums;
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
@@ -199,6 +369,35 @@ ImplicitSprings::Result ImplicitSprings::step(
       sums.max_correction = std::max(sums.max_correction, glm::length(preconditioned_[size_t(i)]));
     }
     return sums;
+  };
+  /* The groups (kept for regroup_steps steps) and the coarse factor (as refactor_coarse
+   * asks); then in each iteration the coarse correction added to z = D⁻¹ r, and rᵀ z again. */
+  bool refactor = refactor_coarse || coarse_.empty();
+  if (int64_t(group_.size()) != n || steps_since_groups_ >= regroup_steps) {
+    build_groups(positions);
+    steps_since_groups_ = 0;
+    refactor = true;
+  }
+  steps_since_groups_++;
+  if (refactor) {
+    factor_coarse();
+  }
+  const auto add_coarse = [&](Residual &sums) {
+    if (groups_num_ == 0) {
+      return;
+    }
+    solve_coarse(residual_);
+    sums.rz = parallel_sum(n, grain, [&](const IndexRange range) {
+      double rz = 0.0;
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        const int32_t a = group_[size_t(i)];
+        if (a >= 0) {
+          preconditioned_[size_t(i)] += coarse_correction_[size_t(a)];
+        }
+        rz += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
+      }
+      return rz;
+    });
   };
   Result result;
   dv_ = guess_;
@@ -210,6 +409,7 @@ ImplicitSprings::Result ImplicitSprings::step(
         return update_residual(range, 1.0f);
       },
       combine);
+  add_coarse(residual);
   direction_ = preconditioned_;
   while (residual.max_correction > velocity_tolerance && result.iterations < max_iterations) {
     const double pq = multiply_dot(direction_, product_);
@@ -217,7 +417,7 @@ ImplicitSprings::Result ImplicitSprings::step(
       break;
     }
     const float alpha = float(residual.rz / pq);
-    const Residual next = parallel_reduce(
+    Residual next = parallel_reduce(
         n, grain, Residual{},
         [&](const IndexRange range) {
           for (int64_t i = range.start; i < range.one_after_last(); i++) {
@@ -226,6 +426,7 @@ ImplicitSprings::Result ImplicitSprings::step(
           return update_residual(range, alpha);
         },
         combine);
+    add_coarse(next);
     const float beta = float(next.rz / residual.rz);
     residual = next;
     parallel_for(n, grain, [&](const IndexRange range) {

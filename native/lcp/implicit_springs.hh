@@ -12,9 +12,10 @@
  *
  * K keeping only its positive semi-definite part (a compressed spring's lateral term is
  * dropped). The matrix is then symmetric positive definite and is solved by conjugate
- * gradients with a block-Jacobi (3 × 3) preconditioner, warm-started from the previous
- * step's solution. The step is stable for any Δt: the springs' stiffness no longer sets the
- * number of substeps.
+ * gradients with a block-Jacobi (3 × 3) preconditioner, plus optionally a coarse correction
+ * over groups of particles (two-level, group_cell), warm-started from the previous step's
+ * solution. The step is stable for any Δt: the springs' stiffness no longer sets the number
+ * of substeps.
  *
  * The attraction/repulsion of eq. 16 may join the same step: its force is applied
  * explicitly by the caller before (in the velocities given), and its stiffness K_p = Jᵀ κ J
@@ -50,12 +51,26 @@ class ImplicitSprings {
               const DensityJacobian *pressure, MutableSpan<vec3> r_velocities);
 
   /* Forgets the previous step's solution, the next solve's first guess. */
-  void reset() { guess_.clear(); }
+  void reset()
+  {
+    guess_.clear();
+    group_.clear();
+    coarse_.clear();
+  }
 
   /* m/s: the conjugate gradients stop when no particle's velocity correction is larger (the
    * LCP solver sets it from h₂ and the step); and their iteration cap. */
   float velocity_tolerance = 1e-5f;
   int max_iterations = 200;
+  /* m: the smallest cell of the grid that groups the particles for the coarse correction
+   * (two-level preconditioner, below); 0 leaves it out. The cell grows until at most
+   * max_groups cells hold particles. */
+  float group_cell = 0.0f;
+  int max_groups = 160;
+  /* Whether this step rebuilds the coarse matrix; otherwise the last one's serves (any
+   * symmetric positive definite A_c gives a valid preconditioner, and within a frame the
+   * blocks change little). */
+  bool refactor_coarse = true;
 
  private:
   /* r_product = (M + Δt C + Δt² K) d for the pair blocks of the last step(). */
@@ -65,6 +80,18 @@ class ImplicitSprings {
   /* Row i of Δt² K_p d (Jᵀ pressure_rates_ and the pair springs), the pressure's part of the
    * product; pressure_rates(d) first. */
   vec3 pressure_row(Span<vec3> d, int64_t i) const;
+
+  /* The coarse correction of the two-level additive preconditioner P⁻¹ = D⁻¹ + Q A_c⁻¹ Qᵀ:
+   * D the 3 × 3 diagonal blocks; Q the aggregation of the free particles into groups, the
+   * cells of a grid (smoothed-out, low-frequency errors are what block-Jacobi leaves to CG:
+   * the pressure of eq. 16 and the springs couple particles across the whole hair volume);
+   * A_c = Qᵀ A Q, Galerkin's coarse matrix, assembled from the same blocks as the product
+   * and factored densely (Cholesky). Symmetric positive definite, so CG stays CG. Built
+   * from the groups of build_groups() at each step. */
+  void build_groups(Span<vec3> positions);
+  void factor_coarse();
+  /* coarse_correction_ = A_c⁻¹ Qᵀ r, per group. */
+  void solve_coarse(Span<vec3> residual);
 
   const LcpConnections *connections_ = nullptr;
   const DensityJacobian *pressure_ = nullptr;
@@ -87,6 +114,17 @@ class ImplicitSprings {
   std::vector<Entry> entries_;
   std::vector<mat3> inverse_diagonal_;
   std::vector<vec3> rhs_, dv_, residual_, preconditioned_, direction_, product_, guess_;
+  /* Per particle its group (−1: fixed); the coarse matrix, then its Cholesky factor (3g × 3g,
+   * column-major, double); the coarse right-hand side and, per group, its correction. */
+  std::vector<int32_t> group_;
+  int64_t groups_num_ = 0;
+  std::vector<double> coarse_, coarse_rhs_;
+  std::vector<vec3> coarse_correction_;
+  std::vector<uint64_t> group_keys_;
+  /* The groups are kept for regroup_steps steps: the particles drift little meanwhile, and
+   * any grouping gives a valid preconditioner. */
+  static constexpr int regroup_steps = 24;
+  int steps_since_groups_ = 0;
 };
 
 }  // namespace hairdyn
