@@ -373,7 +373,11 @@ ImplicitSprings::Result ImplicitSprings::step(
   /* The groups (kept for regroup_steps steps) and the coarse factor (as refactor_coarse
    * asks); then in each iteration the coarse correction added to z = D⁻¹ r, and rᵀ z again. */
   bool refactor = refactor_coarse || coarse_.empty();
-  if (int64_t(group_.size()) != n || steps_since_groups_ >= regroup_steps) {
+  bool regroup = int64_t(group_.size()) != n || steps_since_groups_ >= regroup_steps;
+  for (int64_t i = 0; i < (groups_num_ > 0 && !regroup ? n : 0); i++) {
+    regroup |= (group_[size_t(i)] >= 0) == bool(is_fixed[i]); /* a particle fixed or freed */
+  }
+  if (regroup) {
     build_groups(positions);
     steps_since_groups_ = 0;
     refactor = true;
