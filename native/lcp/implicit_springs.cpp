@@ -143,16 +143,14 @@ void ImplicitSprings::factor_coarse()
   const int64_t n = int64_t(group_.size());
   const float dt2 = dt_ * dt_;
   const std::vector<int32_t> &offsets = connections_->particle_offsets;
-  /* A pair block B in row i, B (d_i − d_j): Qᵀ A Q's blocks [g_i][g_i] += B and
-   * [g_i][g_j] −= B, which cancel within a group (most pairs: a group holds hundreds of
-   * particles). A fixed partner has no unknown: the first only. */
-  const auto add_pair = [&](const int32_t a, const int32_t partner, const mat3 &block) {
-    const int32_t b = group_[size_t(partner)];
-    if (b != a) {
-      add(a, a, block);
-      if (b >= 0) {
-        add(a, b, -block);
-      }
+  /* A pair block B in row i, B (d_i − d_j), gives Qᵀ A Q's blocks [a][a] += B and
+   * [a][b] −= B (a, b the groups of i and j), which cancel within a group: only pairs across
+   * groups are added (a group holds hundreds of particles). A fixed partner (b = −1) has no
+   * unknown: the first only. */
+  const auto add_pair = [&](const int32_t a, const int32_t b, const mat3 &block) {
+    add(a, a, block);
+    if (b >= 0) {
+      add(a, b, -block);
     }
   };
   for (int64_t i = 0; i < n; i++) {
@@ -163,15 +161,17 @@ void ImplicitSprings::factor_coarse()
     add(a, a, mat3(masses_[i]));
     for (int32_t k = offsets[size_t(i)]; k < offsets[size_t(i) + 1]; k++) {
       const Entry &e = entries_[size_t(k)];
-      if (group_[size_t(e.partner)] != a) {
-        add_pair(a, e.partner, e.along * glm::outerProduct(e.axis, e.axis) + mat3(e.across));
+      const int32_t b = group_[size_t(e.partner)];
+      if (b != a) {
+        add_pair(a, b, e.along * glm::outerProduct(e.axis, e.axis) + mat3(e.across));
       }
     }
     if (pressure_ != nullptr) {
       for (int32_t k = pressure_->offsets[size_t(i)]; k < pressure_->offsets[size_t(i) + 1]; k++) {
         const DensityJacobian::Entry &e = pressure_->entries[size_t(k)];
-        if (group_[size_t(e.partner)] != a) {
-          add_pair(a, e.partner,
+        const int32_t b = group_[size_t(e.partner)];
+        if (b != a) {
+          add_pair(a, b,
                    dt2 * (e.along * glm::outerProduct(e.gradient, e.gradient) + mat3(e.across)));
         }
       }

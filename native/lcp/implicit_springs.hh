@@ -86,8 +86,9 @@ class ImplicitSprings {
    * cells of a grid (smoothed-out, low-frequency errors are what block-Jacobi leaves to CG:
    * the pressure of eq. 16 and the springs couple particles across the whole hair volume);
    * A_c = Qᵀ A Q, Galerkin's coarse matrix, assembled from the same blocks as the product
-   * and factored densely (Cholesky). Symmetric positive definite, so CG stays CG. Built
-   * from the groups of build_groups() at each step. */
+   * and factored densely (Cholesky). Symmetric positive definite, so CG stays CG.
+   * factor_coarse() assembles and factors A_c from the step's blocks, when refactor_coarse
+   * asks, over the groups of build_groups() (kept for regroup_steps steps). */
   void build_groups(Span<vec3> positions);
   void factor_coarse();
   /* coarse_correction_ = A_c⁻¹ Qᵀ r, per group. */
