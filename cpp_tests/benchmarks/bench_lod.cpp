@@ -20,7 +20,8 @@
  * length) of its output from a fine simulation of the same frames (the same hierarchy with
  * the level of detail off: the finest level everywhere), over all strands and over the
  * strands whose skeleton the camera sees (visible_error_pct) and over those a top strip drives
- * (strip_error_pct). Skipped when the
+ * (strip_error_pct), and the top strips' skeletons from the mean of their finest skeletons
+ * (strip_skeleton_error_pct). Skipped when the
  * Sintel assets are missing. */
 #include <benchmark/benchmark.h>
 
@@ -50,6 +51,41 @@ StrandSolver skeleton_solver(const LodHierarchy &hierarchy, const std::vector<in
     normals.push_back(hierarchy.root_normal(hierarchy.top_node(node)));
   }
   return StrandSolver(offsets, rest, mat4(1.0f), normals, StrandParams(), sintel_wind());
+}
+
+/* Mean distance (m) of each active top strip's control points from the strand-weighted mean of
+ * its finest skeletons in the fine simulation: whether the strip's skeleton moves as its
+ * strands do on average (strip_error_pct then measures how far its strands spread from that
+ * average, which one skeleton cannot show). 0 when no top strip is active. */
+double strip_skeleton_error(const LodSolver &lod, const LodSolver &fine)
+{
+  const LodHierarchy &hierarchy = lod.hierarchy();
+  const int32_t n = hierarchy.skeleton_points_num();
+  std::vector<vec3> mean(static_cast<size_t>(n));
+  double sum = 0.0;
+  int64_t points = 0;
+  const std::vector<int32_t> finest = hierarchy.level_nodes(hierarchy.max_depth());
+  for (int64_t top = 0; top < hierarchy.top_nodes_num(); top++) {
+    if (!lod.active()[top]) {
+      continue;
+    }
+    std::fill(mean.begin(), mean.end(), vec3(0.0f));
+    float weight = 0.0f;
+    for (const int32_t node : finest) {
+      if (hierarchy.top_node(node) == top) {
+        const float strands = float(hierarchy.strands(node).size());
+        for (int32_t k = 0; k < n; k++) {
+          mean[size_t(k)] += strands * fine.skeleton(node)[k];
+        }
+        weight += strands;
+      }
+    }
+    for (int32_t k = 0; k < n; k++) {
+      sum += double(glm::length(lod.skeleton(top)[k] - mean[size_t(k)] / weight));
+      points++;
+    }
+  }
+  return points > 0 ? sum / double(points) : 0.0;
 }
 
 /* Processor time of the whole process (all threads), in ms: on a shared machine the wall
@@ -82,6 +118,7 @@ void run(benchmark::State &state, const Config config)
     double ms[2] = {0.0, 0.0};
     double fine_ms = 0.0; /* the fine simulation's whole step (the level of detail's only) */
     double error_sum = 0.0, visible_error_sum = 0.0, strip_error_sum = 0.0;
+    double strip_skeleton_error_sum = 0.0;
     double skeletons_sum = 0.0;
     int64_t switches = 0;
     for (const bool collide : {true, false}) {
@@ -136,6 +173,7 @@ void run(benchmark::State &state, const Config config)
             }
             visible_error_sum += visible_points > 0 ? visible_sum / double(visible_points) : 0.0;
             strip_error_sum += strip_points > 0 ? strip_sum / double(strip_points) : 0.0;
+            strip_skeleton_error_sum += strip_skeleton_error(solver, fine);
             skeletons_sum += double(solver.active_num());
             switches += solver.splits_num() + solver.merges_num() + solver.collapses_num();
           }
@@ -174,6 +212,8 @@ void run(benchmark::State &state, const Config config)
       state.counters["visible_error_pct"] =
           100.0 * visible_error_sum / frames_num / s.mean_length;
       state.counters["strip_error_pct"] = 100.0 * strip_error_sum / frames_num / s.mean_length;
+      state.counters["strip_skeleton_error_pct"] =
+          100.0 * strip_skeleton_error_sum / frames_num / s.mean_length;
       state.counters["lod_switches"] = double(switches);
       state.counters["fine_ms"] = fine_ms / frames_num;
       state.counters["speedup"] = fine_ms / ms[1];
