@@ -359,13 +359,17 @@ ImplicitSprings::Result ImplicitSprings::step(
   const auto combine = [](const Residual &a, const Residual &b) {
     return Residual{ a.rz + b.rz, std::max(a.max_correction, b.max_correction) };
   };
-  /* r_i −= alpha q_i, z_i = D_i⁻¹ r_i, and the sums. */
+  /* r_i −= alpha q_i, z_i = D_i⁻¹ r_i, and the sums (rᵀ z only without the coarse
+   * correction: with it, add_coarse sums rᵀ z once z is whole). */
   const auto update_residual = [&](const IndexRange range, const float alpha) {
     Residual sums;
+    const bool jacobi_only = groups_num_ == 0;
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       residual_[size_t(i)] -= alpha * product_[size_t(i)];
       preconditioned_[size_t(i)] = inverse_diagonal_[size_t(i)] * residual_[size_t(i)];
-      sums.rz += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
+      if (jacobi_only) {
+        sums.rz += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
+      }
       sums.max_correction = std::max(sums.max_correction, glm::length(preconditioned_[size_t(i)]));
     }
     return sums;
