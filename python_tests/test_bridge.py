@@ -177,7 +177,7 @@ def test_write_back_is_visible_in_the_depsgraph(open_fixture):
 def test_written_positions_move_the_evaluated_bounds(open_fixture):
     """The outputs' bounds (which Blender culls, shadows and frames by) follow every frame's
     positions, not the first frame's: positions written through foreach_set alone leave the
-    bounds Blender caches untouched (Blender 5.0: both outputs; 5.2: curves whose only write is
+    bounds Blender caches untouched (Blender 5.0: both outputs; 5.2 and 5.3: curves whose only write is
     the positions)."""
     open_fixture("head_curves.blend")
     hair = bpy.data.objects["Hair"]

@@ -4,7 +4,7 @@
 #   .venv (pip, pinned in scripts/requirements-bpy.txt): the newest bpy wheel that installs
 #   for this machine's CPython 3.11, with numpy, pytest and ruff (the style check).
 #   .venv313 (pip, pinned in scripts/requirements-bpy313.txt), only where a CPython 3.13 exists
-#   (on PATH or under pyenv): bpy 5.2 (Blender 5.1/5.2 run Python 3.13), numpy, pytest, the
+#   (on PATH or under pyenv): bpy 5.3 (Blender 5.1 and later run Python 3.13), numpy, pytest, the
 #   pybind11 the 3.13 module is built with, and Dask for `cli.py wedge`.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -56,7 +56,7 @@ make_venv() {
 # native module is built for (one module serves the blender binary and the bpy wheel).
 make_venv .venv /usr/bin/python3.11 requirements-bpy.txt
 
-# Blender 5.1/5.2 run CPython 3.13; Debian 12 has none, pyenv may. CMake builds a second
+# Blender 5.1 and later run CPython 3.13; Debian 12 has none, pyenv may. CMake builds a second
 # module for it from .venv313's interpreter (which carries the pybind11 it needs).
 # (pyenv's shim on PATH fails unless 3.13 is selected, so each candidate is tried.)
 python313=""
@@ -73,5 +73,5 @@ if [ -n "$python313" ]; then
   make_venv .venv313 "$python313" requirements-bpy313.txt
 else
   echo "setup: no CPython 3.13 with headers (python3.13 on PATH or under ~/.pyenv/versions):" \
-       "skipping .venv313, so no native module for Blender 5.1/5.2 and no bpy 5.2 test suite"
+       "skipping .venv313, so no native module for Blender 5.1+ and no bpy 5.3 test suite"
 fi

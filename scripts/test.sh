@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Every hairdyn test: C++ (ctest), then pytest inside Debian's blender 3.4 binary, then pytest
-# with the bpy module of the venv (bpy 5.0, Python 3.11), then with bpy 5.2 on Python 3.13
+# with the bpy module of the venv (bpy 5.0, Python 3.11), then with bpy 5.3 on Python 3.13
 # (.venv313, where setup.sh found a Python 3.13). Every suite runs; the script fails if any
 # failed.
 set -uo pipefail
