@@ -473,25 +473,38 @@ bool collision_avx2_used()
   return use_avx2;
 }
 
+void find_contacts_serial(const ColliderSet &colliders, const Span<vec3> points_wo,
+                          const MutableSpan<uint8_t> r_hit, const MutableSpan<float> r_depth,
+                          const MutableSpan<vec3> r_normal_wo,
+                          const MutableSpan<vec3> r_surface_point_wo,
+                          ContactBatch<map_batch_size> &contacts, MapBatch<map_batch_size> &scratch)
+{
+  const OutputSpans outputs{ r_hit, r_depth, r_normal_wo, r_surface_point_wo };
+  const IndexRange range{ 0, points_wo.size() };
+#if defined(HAIRDYN_BLEND_AVX2)
+  if (use_avx2) {
+    find_contacts_range_avx2(colliders, points_wo, range, contacts, scratch, outputs);
+    return;
+  }
+#endif
+  find_contacts_range_baseline(colliders, points_wo, range, contacts, scratch, outputs);
+}
+
 void find_contacts(const ColliderSet &colliders, const Span<vec3> points_wo,
                    const MutableSpan<uint8_t> r_hit, const MutableSpan<float> r_depth,
                    const MutableSpan<vec3> r_normal_wo, const MutableSpan<vec3> r_surface_point_wo)
 {
-  const OutputSpans outputs{ r_hit, r_depth, r_normal_wo, r_surface_point_wo };
-  const bool avx2 = use_avx2;
   parallel_for(points_wo.size(), 4096, [&](const IndexRange range) {
     /* About 30 KB of batch arrays: per thread, off the (small) worker stacks; left
      * uninitialised (every stage writes what the next reads). */
     const std::unique_ptr<ContactBatch<map_batch_size>> contacts(
         new ContactBatch<map_batch_size>);
     const std::unique_ptr<MapBatch<map_batch_size>> scratch(new MapBatch<map_batch_size>);
-#if defined(HAIRDYN_BLEND_AVX2)
-    if (avx2) {
-      find_contacts_range_avx2(colliders, points_wo, range, *contacts, *scratch, outputs);
-      return;
-    }
-#endif
-    find_contacts_range_baseline(colliders, points_wo, range, *contacts, *scratch, outputs);
+    find_contacts_serial(colliders, points_wo.slice(range.start, range.size),
+                         r_hit.slice(range.start, range.size),
+                         r_depth.slice(range.start, range.size),
+                         r_normal_wo.slice(range.start, range.size),
+                         r_surface_point_wo.slice(range.start, range.size), *contacts, *scratch);
   });
 }
 

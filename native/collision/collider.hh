@@ -466,5 +466,14 @@ bool collision_avx2_used();
 void find_contacts(const ColliderSet &colliders, Span<vec3> points_wo, MutableSpan<uint8_t> r_hit,
                    MutableSpan<float> r_depth, MutableSpan<vec3> r_normal_wo,
                    MutableSpan<vec3> r_surface_point_wo);
+/* The same on the calling thread alone, with the caller's batch arrays (about 30 KB, left
+ * uninitialised: every stage writes what the next reads), for callers inside a parallel loop
+ * (the strand solver's lanes): a few hundred points cost a quarter per point of what batches
+ * of eight do. */
+void find_contacts_serial(const ColliderSet &colliders, Span<vec3> points_wo,
+                          MutableSpan<uint8_t> r_hit, MutableSpan<float> r_depth,
+                          MutableSpan<vec3> r_normal_wo, MutableSpan<vec3> r_surface_point_wo,
+                          ContactBatch<map_batch_size> &contacts,
+                          MapBatch<map_batch_size> &scratch);
 
 }  // namespace hairdyn

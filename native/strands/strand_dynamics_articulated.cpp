@@ -108,6 +108,7 @@ template<int W> struct alignas(chain::lane_alignment) StrandSolver::ArticulatedT
   chain::V3<F> omega;            /* the segment's turn */
   chain::V3<F> half;             /* d t / 2, to the segment's centre */
   chain::V3<F> force;            /* F at the centre */
+  chain::V3<F> tip, tip_velocity; /* the segment's end and its velocity (the contact query's) */
   F rate_product;                /* θ̇ φ̇ */
   chain::M3<F> rest;             /* the rest rotation from the parent's frame */
   F m, d, k;                     /* mass, length, hinge stiffness */
@@ -281,6 +282,13 @@ std::atomic<VectorCode> vector_code{cpu_vector_code()};
 /* A step's scratch for W lanes: per lane the mid-step rates' q̈ and the projected segments
  * (body, outward normal); pass 1's bodies and the recursion's links (with the step's q̈). */
 template<int W> struct LaneScratch {
+  /* add_contact_forces's query: the tips, what the colliders say of each, the batch arrays. */
+  std::vector<vec3> tips;
+  std::vector<uint8_t> hit;
+  std::vector<float> depth;
+  std::vector<vec3> normal, surface;
+  std::unique_ptr<ContactBatch<map_batch_size>> contact_batch;
+  std::unique_ptr<MapBatch<map_batch_size>> map_batch;
   std::vector<vec2> mid_accelerations[W];
   std::vector<std::pair<size_t, vec3>> stops[W];
   std::vector<StrandSolver::ArticulatedTerms<W>> terms;
@@ -292,6 +300,61 @@ template<int W> LaneScratch<W> &lane_scratch()
   return scratch;
 }
 
+
+/* The reaction constraint (Kurihara 1993, eq. 12–15) on the rods whose tips pass 1 put inside
+ * a collider, for the lanes `queried`: every tip of the step in one query (queried segment by
+ * segment, eight tips at a time, the look-ups cost about four times as much per tip: half of a
+ * frame of Sintel's groom on its bust), each force filtered by
+ * contact_force(force, d, tip velocity, contact, reaction constants) (StrandSolver's).
+ * r_contacts[lane] counts the lane's contacts. */
+template<int W, class ContactForce>
+void add_contact_forces(const ColliderSet &colliders, const ReactionConstants &substep_reaction,
+                        const float *step_lengths, const uint8_t *queried, const size_t n,
+                        const ContactForce &contact_force,
+                        StrandSolver::ArticulatedTerms<W> *terms, LaneScratch<W> &scratch,
+                        int64_t *r_contacts)
+{
+  std::vector<vec3> &tips = scratch.tips;
+  tips.clear();
+  for (size_t i = 0; i < n; i++) {
+    for (int lane = 0; lane < W; lane++) {
+      if (queried[lane]) {
+        tips.push_back(get(terms[i].tip, lane));
+      }
+    }
+  }
+  if (tips.empty()) {
+    return;
+  }
+  if (scratch.contact_batch == nullptr) {
+    scratch.contact_batch.reset(new ContactBatch<map_batch_size>);
+    scratch.map_batch.reset(new MapBatch<map_batch_size>);
+  }
+  scratch.hit.resize(tips.size());
+  scratch.depth.resize(tips.size());
+  scratch.normal.resize(tips.size());
+  scratch.surface.resize(tips.size());
+  find_contacts_serial(colliders, tips, scratch.hit, scratch.depth, scratch.normal,
+                       scratch.surface, *scratch.contact_batch, *scratch.map_batch);
+  size_t q = 0;
+  for (size_t i = 0; i < n; i++) {
+    for (int lane = 0; lane < W; lane++) {
+      if (!queried[lane]) {
+        continue;
+      }
+      if (scratch.hit[q]) {
+        const Contact contact{ scratch.depth[q], scratch.normal[q], scratch.surface[q] };
+        ReactionConstants reaction = substep_reaction;
+        reaction.dt = step_lengths[lane]; /* the substep's collision constants, for this step */
+        put(terms[i].force, lane,
+            contact_force(get(terms[i].force, lane), terms[i].d[lane],
+                          get(terms[i].tip_velocity, lane), contact, reaction));
+        r_contacts[lane]++;
+      }
+      q++;
+    }
+  }
+}
 
 inline rvec3 real(const vec3 &v)
 {
@@ -565,9 +628,8 @@ template<int W>
 [[gnu::always_inline]] inline void StrandSolver::articulated_forward(
     const Span<int64_t> curves, const Substep &substep, const float *step_lengths,
     const Span<mat3> root_frames, const Span<vec3> winds,
-    const Span<const vec2 *> mid_accelerations,
-    const Span<uint8_t> queried, ArticulatedTerms<W> *terms, float *r_fastest_turn,
-    Counts *r_counts) const
+    const Span<const vec2 *> mid_accelerations, ArticulatedTerms<W> *terms,
+    float *r_fastest_turn) const
 {
   /* Pass 1, root to tip (Table 7.1, first loop), W strands at once: geometry,
    * relative velocities, the rates at the middle of the step and the external force F on
@@ -641,22 +703,10 @@ template<int W>
                                        substep.head_velocity.of_point(center - head_center);
     const V3<Floats> tip_velocity = node_velocity + cross(omega, d * t) +
                                     substep.head_velocity.of_point(tip - head_center);
-    V3<Floats> force = substep.forces.on_segment(d, center, center_velocity, wind, h);
-    ContactBatch<8> contacts;
-    find_lane_contacts(colliders_, tip, contacts);
-    for (int lane = 0; colliders_ != nullptr && lane < W; lane++) {
-      Contact contact;
-      if (queried[lane] && contacts.read(lane, contact)) {
-        ReactionConstants reaction = substep.reaction;
-        reaction.dt = h[lane]; /* the substep's collision constants, for this step */
-        put(force, lane,
-            contact_force(get(force, lane), d[lane], get(tip_velocity, lane), contact,
-                          reaction));
-        r_counts[lane].contacts++;
-      }
-    }
-
     ArticulatedTerms<W> &x = terms[i];
+    x.force = substep.forces.on_segment(d, center, center_velocity, wind, h);
+    x.tip = tip;
+    x.tip_velocity = tip_velocity;
     x.t = t;
     x.e_theta = e_theta;
     x.pole = pole;
@@ -665,7 +715,6 @@ template<int W>
     x.relative_turn = relative_turn;
     x.omega = omega;
     x.half = half;
-    x.force = force;
     x.rate_product = rate.x * rate.y;
     x.rest = rest;
     x.m = m;
@@ -873,17 +922,25 @@ template<int W>
    * and 3, for all lanes in vectors. */
   const bool implicit = params_.integrator == Integrator::Implicit;
   float fastest_turn[W];
-  Counts lane_counts[W];
+  int64_t lane_contacts[W];
   const auto stage = [&](const uint8_t *queried) HAIRDYN_CHAIN_INLINE_LAMBDA {
     double hd[W];
     for (int lane = 0; lane < W; lane++) {
       hd[lane] = double(lane_h[lane]);
-      lane_counts[lane] = Counts();
+      lane_contacts[lane] = 0;
     }
     articulated_forward<W>(Span<int64_t>(lane_curves, W), substep, lane_h,
                            Span<mat3>(lane_frames, W), Span<vec3>(lane_winds, W),
-                           Span<const vec2 *>(mids, W), Span<uint8_t>(queried, W),
-                           lane_terms.data(), fastest_turn, lane_counts);
+                           Span<const vec2 *>(mids, W), lane_terms.data(), fastest_turn);
+    if (colliders_ != nullptr) {
+      add_contact_forces<W>(
+          *colliders_, substep.reaction, lane_h, queried, n,
+          [&](const vec3 &force, const float d, const vec3 &tip_velocity,
+              const Contact &contact, const ReactionConstants &reaction) {
+            return this->contact_force(force, d, tip_velocity, contact, reaction);
+          },
+          lane_terms.data(), scratch, lane_contacts);
+    }
     /* Passes 2 and 3 for all lanes. */
     tip_to_root(lane_links.data(), lane_terms.data(), n, hd, implicit,
                 double(params_.bending_damping));
@@ -927,7 +984,7 @@ template<int W>
       continue;
     }
     committed[lane] = 1;
-    counts.contacts += lane_counts[lane].contacts;
+    counts.contacts += lane_contacts[lane];
   }
   articulated_commit<W>(Span<int64_t>(lane_curves, W), substep, lane_h,
                         Span<mat3>(lane_frames, W), lane_terms.data(), committed,

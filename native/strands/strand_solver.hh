@@ -330,15 +330,14 @@ class StrandSolver {
   /* Pass 1 of an articulated step, root to tip, for W strands of one point count at once,
    * one lane each (a lane may repeat another's strand): the shape, the rates at the
    * middle of the step (q̇ + h q̈ / 2 with q̈ = mid_accelerations[lane]), the velocity
-   * products, the external forces (the tips' contacts queried in the lanes `queried`, and
-   * counted per lane in r_counts) and the hinges, into `terms` (one per segment). Writes each
-   * lane's fastest turn (rad/s) of a segment or across a hinge. */
+   * products, the external forces but the colliders' (their reaction constraint is added
+   * from the tips it leaves in `terms`: add_contact_forces) and the hinges, into `terms` (one
+   * per segment). Writes each lane's fastest turn (rad/s) of a segment or across a hinge. */
   template<int W>
   void articulated_forward(Span<int64_t> curves, const Substep &substep,
                            const float *step_lengths, Span<mat3> root_frames,
                            Span<vec3> winds, Span<const vec2 *> mid_accelerations,
-                           Span<uint8_t> queried, ArticulatedTerms<W> *terms,
-                           float *r_fastest_turn, Counts *r_counts) const;
+                           ArticulatedTerms<W> *terms, float *r_fastest_turn) const;
   /* For the lanes `committed` of W strands (a lane may repeat another's strand), the step's
    * hinge accelerations (the recursion's, in the lane scratch) into rates and angles, then the
    * new shapes from pass 1's `terms` (rest rotations and lengths), W at once, with each lane's
