@@ -163,7 +163,7 @@ void ImplicitSprings::factor_coarse()
       const Entry &e = entries_[size_t(k)];
       const int32_t b = group_[size_t(e.partner)];
       if (b != a) {
-        add_pair(a, b, e.along * glm::outerProduct(e.axis, e.axis) + mat3(e.across));
+        add_pair(a, b, e.block());
       }
     }
     if (pressure_ != nullptr) {
@@ -325,8 +325,8 @@ ImplicitSprings::Result ImplicitSprings::step(
         force += (stretch_force_[size_t(p)] + damping_time * ak * glm::dot(v_ij, x_hat)) * x_hat;
         /* K (v_i − v_j) of this pair. */
         stiff_v -= ak * ((1.0f - lateral) * glm::dot(axis, v_ij) * axis + lateral * v_ij);
-        diagonal += along_[size_t(p)] * glm::outerProduct(axis, axis) + mat3(across_[size_t(p)]);
         entries_[size_t(k)] = { j, along_[size_t(p)], across_[size_t(p)], axis };
+        diagonal += entries_[size_t(k)].block();
       }
       rhs_[size_t(i)] = dt * (force - dt * stiff_v);
       if (pressure != nullptr) {

@@ -111,6 +111,8 @@ class ImplicitSprings {
     int32_t partner;
     float along, across;
     vec3 axis;
+    /* The pair's block Δt C + Δt² K: along x̂x̂ᵀ + across I. */
+    mat3 block() const { return along * glm::outerProduct(axis, axis) + mat3(across); }
   };
   std::vector<Entry> entries_;
   std::vector<mat3> inverse_diagonal_;
