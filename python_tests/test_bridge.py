@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from mathutils import Vector
 
-from hairdyn import bridge, native, simulation
+from hairdyn import bridge, export, native, simulation
 from hairdyn.errors import HairdynError
 
 
@@ -177,8 +177,8 @@ def test_write_back_is_visible_in_the_depsgraph(open_fixture):
 def test_written_positions_move_the_evaluated_bounds(open_fixture):
     """The outputs' bounds (which Blender culls, shadows and frames by) follow every frame's
     positions, not the first frame's: positions written through foreach_set alone leave the
-    bounds Blender caches untouched (Blender 5.0: both outputs; 5.2 and 5.3: curves whose only write is
-    the positions)."""
+    bounds Blender caches untouched (Blender 5.0: both outputs; 5.2 and 5.3: curves whose only
+    write is the positions)."""
     open_fixture("head_curves.blend")
     hair = bpy.data.objects["Hair"]
     groom = bridge.read_curves(hair, depsgraph())
@@ -203,15 +203,7 @@ def test_written_positions_move_the_evaluated_bounds(open_fixture):
 def _evaluated_points_node_group():
     """Geometry nodes: the curves' evaluated points (Catmull-Rom, at their resolution) as the
     vertices of a mesh, as a modifier downstream of the output would see them."""
-    group = bpy.data.node_groups.new("EvaluatedPoints", 'GeometryNodeTree')
-    if hasattr(group, "interface"):  # Blender 4.0 and later
-        group.interface.new_socket("Geometry", in_out='INPUT', socket_type='NodeSocketGeometry')
-        group.interface.new_socket("Geometry", in_out='OUTPUT', socket_type='NodeSocketGeometry')
-    else:
-        group.inputs.new('NodeSocketGeometry', "Geometry")
-        group.outputs.new('NodeSocketGeometry', "Geometry")
-    inputs = group.nodes.new("NodeGroupInput")
-    outputs = group.nodes.new("NodeGroupOutput")
+    group, inputs, outputs = export.geometry_group("EvaluatedPoints")
     to_points = group.nodes.new("GeometryNodeCurveToPoints")
     to_points.mode = 'EVALUATED'
     to_vertices = group.nodes.new("GeometryNodePointsToVertices")

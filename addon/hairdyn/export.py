@@ -51,19 +51,25 @@ def available():
     return [suffix for suffix in FORMATS if missing(suffix) is None]
 
 
-def _pass_through_group():
-    """A Geometry Nodes group that returns its input unchanged."""
-    group = bpy.data.node_groups.get(_NODE_GROUP)
-    if group is not None:
-        return group
-    group = bpy.data.node_groups.new(_NODE_GROUP, 'GeometryNodeTree')
+def geometry_group(name):
+    """A new Geometry Nodes group with one Geometry input and one Geometry output (either
+    Blender's API for them), and its input and output nodes, not linked yet."""
+    group = bpy.data.node_groups.new(name, 'GeometryNodeTree')
     if hasattr(group, "interface"):  # 4.0+
         for in_out in ('INPUT', 'OUTPUT'):
             group.interface.new_socket("Geometry", in_out=in_out, socket_type='NodeSocketGeometry')
     else:
         group.inputs.new('NodeSocketGeometry', "Geometry")
         group.outputs.new('NodeSocketGeometry', "Geometry")
-    source, sink = group.nodes.new('NodeGroupInput'), group.nodes.new('NodeGroupOutput')
+    return group, group.nodes.new('NodeGroupInput'), group.nodes.new('NodeGroupOutput')
+
+
+def _pass_through_group():
+    """A Geometry Nodes group that returns its input unchanged."""
+    group = bpy.data.node_groups.get(_NODE_GROUP)
+    if group is not None:
+        return group
+    group, source, sink = geometry_group(_NODE_GROUP)
     group.links.new(source.outputs[0], sink.inputs[0])
     return group
 
