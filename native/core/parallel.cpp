@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
@@ -14,11 +15,14 @@ namespace hairdyn {
 namespace {
 
 /* The workers of parallel_for: threads that sleep on a condition variable between loops.
- * OpenMP's threads spin after a loop; inside Blender, whose own threads share the cores, the
- * spinning slowed a frame 5× in Blender 3.4, which loads libgomp itself (so the add-on could
- * not ask it to sleep with OMP_WAIT_POLICY). A loop hands out its chunks from an atomic
- * counter; the caller works too. A process forked from one that ran loops (Python's
- * multiprocessing) runs its loops alone. */
+ * OpenMP's threads spin after a loop (200 ms by default); inside Blender, whose own threads
+ * share the cores, the spinning slowed a frame 5× in Blender 3.4, which loads libgomp itself
+ * (so the add-on could not ask it to sleep with OMP_WAIT_POLICY). Waking a sleeping thread
+ * takes tens of microseconds, though, as long as a whole short loop (a conjugate-gradient
+ * iteration's passes take 50–300 µs): so a worker first spins for spin_time after a loop, and
+ * the caller as long for the workers to finish, before either sleeps. A loop hands out its
+ * chunks from an atomic counter; the caller works too. A process forked from one that ran
+ * loops (Python's multiprocessing) runs its loops alone. */
 class ThreadPool {
  public:
   ~ThreadPool() { resize(0); }
@@ -51,7 +55,7 @@ class ThreadPool {
     stop_ = false;
     owner_ = getpid();
     for (int i = 1; i < thread_num; i++) {
-      workers_.emplace_back([this, seen = generation_]() { work(seen); });
+      workers_.emplace_back([this, seen = generation_.load()]() { work(seen); });
     }
   }
 
@@ -85,8 +89,9 @@ class ThreadPool {
     }
     wake_.notify_all();
     take_chunks();
+    spin_while([this]() { return busy_.load(std::memory_order_acquire) != 0; });
     std::unique_lock<std::mutex> lock(mutex_);
-    done_.wait(lock, [this]() { return busy_ == 0; });
+    done_.wait(lock, [this]() { return busy_.load(std::memory_order_relaxed) == 0; });
     job_ = nullptr;
     if (error_) {
       std::rethrow_exception(error_);
@@ -96,10 +101,31 @@ class ThreadPool {
  private:
   explicit ThreadPool(const int thread_num) { resize(thread_num); }
 
+  /* Spins while `busy()` holds, at most spin_time. */
+  template<typename Busy> static void spin_while(const Busy &busy)
+  {
+    using clock = std::chrono::steady_clock;
+    const clock::time_point until = clock::now() + spin_time;
+    while (busy()) {
+      for (int i = 0; i < 64; i++) {
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+      }
+      if (clock::now() > until) {
+        return;
+      }
+    }
+  }
+
   /* `seen`: the loop generation when the worker was made (no loop runs then). */
   void work(uint64_t seen)
   {
     while (true) {
+      spin_while([&]() {
+        return generation_.load(std::memory_order_acquire) == seen &&
+               !stop_.load(std::memory_order_relaxed);
+      });
       {
         std::unique_lock<std::mutex> lock(mutex_);
         wake_.wait(lock, [&]() { return stop_ || generation_ != seen; });
@@ -141,9 +167,11 @@ class ThreadPool {
   const ChunkFn *job_ = nullptr;
   int64_t chunks_ = 0;
   std::atomic<int64_t> next_{0};
-  int busy_ = 0; /* workers not yet done with the current loop */
-  uint64_t generation_ = 0;
-  bool stop_ = false;
+  std::atomic<int> busy_{0}; /* workers not yet done with the current loop */
+  /* Written under mutex_; atomic, so that the spinning threads may read them without it. */
+  std::atomic<uint64_t> generation_{0};
+  std::atomic<bool> stop_{false};
+  static constexpr std::chrono::microseconds spin_time{50};
   std::exception_ptr error_;
   static thread_local bool in_loop_;
 };
