@@ -514,6 +514,19 @@ template<int W>
   /* Per strand, the nodes where its substep began, if it cut it into steps. */
   thread_local std::vector<vec3> substep_start[group_strands_max];
   while (active_num > 0) {
+    /* The strands that need a predictor stage first: a stage of W lanes runs the predictor
+     * for all of them when one needs it (articulated_step), so those step together. A strand
+     * has the same bits in any lane. */
+    int64_t ordered[group_strands_max];
+    int64_t predicted_num = 0;
+    for (const bool predicted : { true, false }) {
+      for (int64_t j = 0; j < active_num; j++) {
+        if ((accelerations_known_[size_t(curves[active[j]])] < 2) == predicted) {
+          ordered[predicted_num++] = active[j];
+        }
+      }
+    }
+    std::copy(ordered, ordered + active_num, active);
     /* One step of every strand still stepping, W at a time: those that cut their steps fill
      * the vectors together, whichever strands they stepped beside at first. */
     int64_t step_curves[group_strands_max];
