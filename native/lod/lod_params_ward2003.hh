@@ -86,7 +86,8 @@ struct LodParams {
     fn(&LodParams::coarsest_level,
        ParamInfo{"coarsest_level", "", "", 0.0, 64.0,
                  "Coarsest hierarchy level used, and where hidden hair goes (Ward & Lin 2003, "
-                 "§6.1); 0 is the top strips"});
+                 "§6.1); 0 is the top strips. A deeper level keeps hidden hair closer to a full "
+                 "simulation, at more cost"});
     fn(&LodParams::distance_near,
        ParamInfo{"distance_near", "", "m", 0.0, 1e6,
                  "Camera distance at or below which the finest level is chosen (Ward & Lin "
