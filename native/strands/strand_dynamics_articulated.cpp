@@ -518,11 +518,11 @@ template<int W>
      * for all of them when one needs it (articulated_step), so those step together. A strand
      * has the same bits in any lane. */
     int64_t ordered[group_strands_max];
-    int64_t predicted_num = 0;
+    int64_t placed = 0;
     for (const bool predicted : { true, false }) {
       for (int64_t j = 0; j < active_num; j++) {
-        if ((accelerations_known_[size_t(curves[active[j]])] < 2) == predicted) {
-          ordered[predicted_num++] = active[j];
+        if (needs_predictor(curves[active[j]]) == predicted) {
+          ordered[placed++] = active[j];
         }
       }
     }
@@ -619,7 +619,7 @@ template<int W>
    * flipped its sign between them held, or zero for a predictor stage when they are not both
    * known (a state was set, a pass's changes or contact impulses broke the trend). */
   const size_t first = size_t(curve_offsets_[size_t(curve)]) + 1;
-  if (accelerations_known_[size_t(curve)] < 2) {
+  if (needs_predictor(curve)) {
     std::fill(r_accelerations.begin(), r_accelerations.end(), vec2(0.0f));
     return;
   }
@@ -916,7 +916,7 @@ template<int W>
     lane_winds[lane] = winds[from];
     lane_mid_accelerations[lane].resize(n);
     mids[lane] = lane_mid_accelerations[from].data();
-    predict[lane] = lane < lanes_num && accelerations_known_[size_t(curves[lane])] < 2;
+    predict[lane] = lane < lanes_num && needs_predictor(curves[lane]);
     any_predict |= predict[lane];
     if (lane < lanes_num) {
       r_outcomes[lane] = 1;

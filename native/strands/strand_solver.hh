@@ -324,6 +324,12 @@ class StrandSolver {
   void articulated_step(Span<int64_t> curves, const Substep &substep, Span<float> step_lengths,
                         Span<uint8_t> may_split, Span<mat3> root_frames, Span<vec3> winds,
                         Counts &counts, MutableSpan<int> r_outcomes);
+  /* Whether strand `curve`'s next step needs a predictor stage: the q̈ of its last two steps
+   * are not both known (strand_dynamics_articulated.cpp). */
+  bool needs_predictor(const int64_t curve) const
+  {
+    return accelerations_known_[size_t(curve)] < 2;
+  }
   /* The q̈ that the mid-step rates of strand `curve`'s next step take: the last two steps'
    * extrapolated, or zeros (a predictor stage's) when they are not both known. */
   void mid_step_accelerations(int64_t curve, MutableSpan<vec2> r_accelerations) const;
