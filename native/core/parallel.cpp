@@ -20,7 +20,8 @@ namespace {
  * (so the add-on could not ask it to sleep with OMP_WAIT_POLICY). Waking a sleeping thread
  * takes tens of microseconds, though, as long as a whole short loop (a conjugate-gradient
  * iteration's passes take 50–300 µs): so a worker first spins for spin_time after a loop, and
- * the caller as long for the workers to finish, before either sleeps. A loop hands out its
+ * the caller as long for the workers to finish, both yielding the core as they spin
+ * (spin_while), before either sleeps. A loop hands out its
  * chunks from an atomic counter; the caller works too. A process forked from one that ran
  * loops (Python's multiprocessing) runs its loops alone. */
 class ThreadPool {
