@@ -2,7 +2,8 @@
  * 20,000 particles of back hair under gravity with a swaying head, on 1 and 2 threads.
  * Arguments: target particle count, threads, implicit springs (1) or explicit (0), implicit
  * pressure (1) or explicit (0). The counter "substeps" is the substeps per frame,
- * "cg_per_substep" the conjugate-gradient iterations of the implicit springs per substep,
+ * "cg_per_substep" the conjugate-gradient iterations of the implicit springs per substep and
+ * "products_per_substep" their matrix products (the iterations' and the first guess's),
  * "searches_per_frame" the neighbour searches a frame (core/spatial_grid.hh's Verlet list). */
 #include <benchmark/benchmark.h>
 
@@ -35,12 +36,13 @@ static void BM_LcpFrame(benchmark::State &state)
   }
   int frame = 0;
   const int64_t searches_before = solver.neighbor_searches();
-  double substeps = 0.0, iterations = 0.0;
+  double substeps = 0.0, iterations = 0.0, products = 0.0;
   for (auto _ : state) {
     const float angle = 0.3f * std::sin(float(frame++) * 0.2f);
     solver.step(1.0f / 24.0f, glm::rotate(mat4(1.0f), angle, vec3(0.0f, 0.0f, 1.0f)));
     substeps += solver.substeps_used();
     iterations += solver.spring_iterations();
+    products += solver.spring_products();
     benchmark::DoNotOptimize(solver.positions().data());
   }
   state.counters["particles"] = double(solver.particles_num());
@@ -49,6 +51,7 @@ static void BM_LcpFrame(benchmark::State &state)
   state.counters["searches_per_frame"] =
       double(solver.neighbor_searches() - searches_before) / double(state.iterations());
   state.counters["cg_per_substep"] = substeps > 0.0 ? iterations / substeps : 0.0;
+  state.counters["products_per_substep"] = substeps > 0.0 ? products / substeps : 0.0;
   state.counters["frames_per_s"] =
       benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
   set_thread_num(0);

@@ -244,6 +244,58 @@ void ImplicitSprings::solve_coarse(const Span<vec3> residual)
   }
 }
 
+int ImplicitSprings::first_guess()
+{
+  const int64_t n = int64_t(dv_.size());
+  std::fill(dv_.begin(), dv_.end(), vec3(0.0f));
+  std::fill(product_.begin(), product_.end(), vec3(0.0f));
+  const auto dot = [&](const std::vector<vec3> &a, const std::vector<vec3> &b) {
+    return parallel_sum(n, grain, [&](const IndexRange range) {
+      double sum = 0.0;
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        sum += double(glm::dot(a[size_t(i)], b[size_t(i)]));
+      }
+      return sum;
+    });
+  };
+  /* p += s q and A p += s A q, over every particle. */
+  const auto add_scaled = [&](std::vector<vec3> &p, std::vector<vec3> &product, const float s,
+                              const std::vector<vec3> &q, const std::vector<vec3> &q_product) {
+    parallel_for(n, grain, [&](const IndexRange range) {
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        p[size_t(i)] += s * q[size_t(i)];
+        product[size_t(i)] += s * q_product[size_t(i)];
+      }
+    });
+  };
+  basis_.resize(history_.size());
+  basis_products_.resize(history_.size());
+  std::vector<double> energies;
+  for (size_t k = 0; k < history_.size(); k++) {
+    std::vector<vec3> &p = basis_[energies.size()], &product = basis_products_[energies.size()];
+    /* A fixed particle has no unknown (the product takes its Δv as 0). */
+    p.resize(size_t(n));
+    product.resize(size_t(n));
+    for (int64_t i = 0; i < n; i++) {
+      p[size_t(i)] = is_fixed_[i] ? vec3(0.0f) : history_[k][size_t(i)];
+    }
+    const double energy = multiply_dot(p, product);
+    /* A-orthogonal to the basis so far (Gram-Schmidt in the A inner product); dropped when
+     * what is left of it is rounding. */
+    for (size_t j = 0; j < energies.size(); j++) {
+      const float beta = float(dot(basis_[j], product) / energies[j]);
+      add_scaled(p, product, -beta, basis_[j], basis_products_[j]);
+    }
+    const double left = dot(p, product);
+    if (!(left > 1e-8 * energy)) {
+      continue;
+    }
+    energies.push_back(left);
+    add_scaled(dv_, product_, float(dot(p, rhs_) / left), p, product);
+  }
+  return int(history_.size());
+}
+
 ImplicitSprings::Result ImplicitSprings::step(
     const LcpConnections &connections, const Span<vec3> positions, const Span<float> alpha_k,
     const float damping_time, const Span<float> masses, const Span<uint8_t> is_fixed,
@@ -269,8 +321,8 @@ ImplicitSprings::Result ImplicitSprings::step(
   }
   inverse_diagonal_.resize(size_t(n));
   entries_.resize(connections.particle_pairs.size());
-  if (int64_t(guess_.size()) != n) {
-    guess_.assign(size_t(n), vec3(0.0f));
+  if (!history_.empty() && int64_t(history_.front().size()) != n) {
+    history_.clear();
   }
 
   /* Pair blocks Δt C + Δt² K, and the spring forces of the step's start. */
@@ -349,8 +401,8 @@ ImplicitSprings::Result ImplicitSprings::step(
     }
   });
 
-  /* Preconditioned conjugate gradients, starting from the previous step's Δv (from one
-   * substep to the next the springs' impulse changes little), until no particle's
+  /* Preconditioned conjugate gradients, starting from the projection of the last steps' Δv
+   * (from one substep to the next the springs' impulse changes little), until no particle's
    * preconditioned residual, a velocity correction, exceeds the tolerance. */
   struct Residual {
     double rz = 0.0;          /* rᵀ P⁻¹ r */
@@ -408,8 +460,7 @@ ImplicitSprings::Result ImplicitSprings::step(
     });
   };
   Result result;
-  dv_ = guess_;
-  multiply_dot(dv_, product_); /* r = b − A Δv₀ */
+  result.products = first_guess(); /* r = b − A Δv₀ */
   residual_ = rhs_;
   Residual residual = parallel_reduce(
       n, grain, Residual{},
@@ -443,6 +494,7 @@ ImplicitSprings::Result ImplicitSprings::step(
       }
     });
     result.iterations++;
+    result.products++;
   }
   result.max_correction = residual.max_correction;
 
@@ -451,7 +503,15 @@ ImplicitSprings::Result ImplicitSprings::step(
       r_velocities[i] += dv_[size_t(i)];
     }
   });
-  guess_ = dv_;
+  if (guess_history > 0) {
+    /* The newest first; the oldest's storage takes the new one when the history is full. */
+    history_.resize(std::min(history_.size(), size_t(guess_history)));
+    if (int64_t(history_.size()) < guess_history) {
+      history_.emplace_back();
+    }
+    std::rotate(history_.rbegin(), history_.rbegin() + 1, history_.rend());
+    history_.front() = dv_;
+  }
   return result;
 }
 

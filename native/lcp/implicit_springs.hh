@@ -13,9 +13,9 @@
  * K keeping only its positive semi-definite part (a compressed spring's lateral term is
  * dropped). The matrix is then symmetric positive definite and is solved by conjugate
  * gradients with a block-Jacobi (3 × 3) preconditioner, plus optionally a coarse correction
- * over groups of particles (two-level, group_cell), warm-started from the previous step's
- * solution. The step is stable for any Δt: the springs' stiffness no longer sets the number
- * of substeps.
+ * over groups of particles (two-level, group_cell), warm-started from the previous steps'
+ * solutions (their Galerkin projection, guess_history). The step is stable for any Δt: the
+ * springs' stiffness no longer sets the number of substeps.
  *
  * The attraction/repulsion of eq. 16 may join the same step: its force is applied
  * explicitly by the caller before (in the velocities given), and its stiffness K_p = Jᵀ κ J
@@ -38,6 +38,8 @@ class ImplicitSprings {
  public:
   struct Result {
     int iterations = 0;
+    /* Matrix products, the iterations' and the first guess's (one per vector of its basis). */
+    int products = 0;
     /* m/s: the largest velocity correction P_i⁻¹ r_i left at the end. */
     float max_correction = 0.0f;
   };
@@ -50,10 +52,10 @@ class ImplicitSprings {
               float damping_time, Span<float> masses, Span<uint8_t> is_fixed, float dt,
               const DensityJacobian *pressure, MutableSpan<vec3> r_velocities);
 
-  /* Forgets the previous step's solution, the next solve's first guess. */
+  /* Forgets the previous steps' solutions, the next solve's first guess. */
   void reset()
   {
-    guess_.clear();
+    history_.clear();
     group_.clear();
     coarse_.clear();
   }
@@ -71,6 +73,8 @@ class ImplicitSprings {
    * symmetric positive definite A_c gives a valid preconditioner, and within a frame the
    * blocks change little). */
   bool refactor_coarse = true;
+  /* How many of the last steps' solutions span the first guess (0: start from zero). */
+  int guess_history = 2;
 
  private:
   /* r_product = (M + Δt C + Δt² K) d for the pair blocks of the last step(). */
@@ -93,6 +97,8 @@ class ImplicitSprings {
   void factor_coarse();
   /* coarse_correction_ = A_c⁻¹ Qᵀ r, per group. */
   void solve_coarse(Span<vec3> residual);
+  /* dv_ = the first guess and product_ = A dv_ (see history_); returns the products it took. */
+  int first_guess();
 
   const LcpConnections *connections_ = nullptr;
   const DensityJacobian *pressure_ = nullptr;
@@ -116,7 +122,16 @@ class ImplicitSprings {
   };
   std::vector<Entry> entries_;
   std::vector<mat3> inverse_diagonal_;
-  std::vector<vec3> rhs_, dv_, residual_, preconditioned_, direction_, product_, guess_;
+  std::vector<vec3> rhs_, dv_, residual_, preconditioned_, direction_, product_;
+  /* The last steps' solutions, the newest first, and the first guess's basis p_k with A p_k:
+   * the first guess is the solution's Galerkin projection onto their span, Δv₀ = Σ_k c_k Δv₋ₖ
+   * with c minimising the A-norm of the error Δv − Δv₀ (the basis A-orthogonalised, so
+   * c_k = p_kᵀ b / p_kᵀ A p_k). Of that span's vectors it is the closest to the solution,
+   * whatever the motion: about the last Δv where the impulse changes slowly, a line through
+   * the last two where it grows steadily, a turned Δv where the springs ring. It costs one
+   * product per vector; the step's matrix is new, so the last steps' products do not serve
+   * (coefficients from them took more iterations than the last Δv alone). */
+  std::vector<std::vector<vec3>> history_, basis_, basis_products_;
   /* Per particle its group (−1: fixed); the coarse matrix, then its Cholesky factor (3g × 3g,
    * column-major, double); the coarse right-hand side and, per group, its correction. */
   std::vector<int32_t> group_;

@@ -422,7 +422,7 @@ bool LcpSolver::step(const float frame_dt, const mat4 &head_to_world)
   const float dt_max = frame_dt / float(estimate.count);
   float elapsed = 0.0f;
   substeps_used_ = 0;
-  spring_iterations_ = 0;
+  spring_iterations_ = spring_products_ = 0;
   while (elapsed < frame_dt * (1.0f - 1e-5f)) {
     if (substeps_used_ == params_.max_substeps) {
       failure_ = "LCP stopped the frame after max_substeps (" +
@@ -533,11 +533,11 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
                                params_.pressure_stiffness, params_.rest_density,
                                pressure_jacobian_);
     }
-    spring_iterations_ +=
-        implicit_springs_
-            .step(connections_, x_head_, alpha_k_, params_.spring_damping, masses_, is_fixed_, dt,
-                  implicit_pressure(params_) ? &pressure_jacobian_ : nullptr, v_head_)
-            .iterations;
+    const ImplicitSprings::Result solve = implicit_springs_.step(
+        connections_, x_head_, alpha_k_, params_.spring_damping, masses_, is_fixed_, dt,
+        implicit_pressure(params_) ? &pressure_jacobian_ : nullptr, v_head_);
+    spring_iterations_ += solve.iterations;
+    spring_products_ += solve.products;
   }
   x_start_ = x_head_;
   parallel_for(n, 4096, [&](const IndexRange range) {

@@ -98,8 +98,10 @@ class LcpSolver {
   int substeps_used() const { return substeps_used_; }
   /* Neighbour searches since the solver was made. */
   int64_t neighbor_searches() const { return neighbors_.builds(); }
-  /* Conjugate-gradient iterations of the implicit springs over the last frame. */
+  /* Conjugate-gradient iterations of the implicit springs over the last frame, and their
+   * matrix products (the iterations' and the first guesses'). */
   int spring_iterations() const { return spring_iterations_; }
+  int spring_products() const { return spring_products_; }
 
   /* World space, after the last step. */
   Span<vec3> positions() const { return positions_wo_; }
@@ -189,7 +191,7 @@ class LcpSolver {
   /* Per step buffers. The hair's neighbours within 2h₂ (head frame). */
   VerletNeighbors neighbors_;
   std::vector<float> density_, k_, alpha_k_, side_sums_, damping_;
-  int substeps_used_ = 0, spring_iterations_ = 0;
+  int substeps_used_ = 0, spring_iterations_ = 0, spring_products_ = 0;
   ImplicitSprings implicit_springs_;
   DensityJacobian pressure_jacobian_; /* eq. 16's stiffness, when implicit */
   std::vector<vec3> forces_, damped_forces_;
