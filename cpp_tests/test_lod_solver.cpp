@@ -192,7 +192,10 @@ TEST(LodSolver, StrandsBehindTheHeadAreCoarsest)
       hidden_trees += all_hidden;
       front_trees += all_front;
     }
-    EXPECT_GE(hidden_trees, 3);
+    /* Of 48 trees, 6 are wholly hidden without occlusion and 2 with it: there the top strips
+     * drive them, and a strip's strands kept out of the head (push_out_of_bodies) show some
+     * point past its outline in a third tree. */
+    EXPECT_GE(hidden_trees, 2);
     EXPECT_GE(front_trees, 3);
   }
 }
@@ -671,7 +674,7 @@ TEST(LodSolver, WardTablesSceneOnSintel)
    * takes whichever criterion wants more detail (measured: mean level 3.34 close, 3.03 at 8 m;
    * 2,318 and 2,121 skeletons). */
   std::vector<int32_t> before = strand_levels(solver);
-  float stretch = 0.0f;
+  float stretch = 0.0f, deepest_share = 0.0f;
   for (int frame = 0; frame < sintel_frames_num + 8; frame++) {
     const int camera_frame = std::min(frame, sintel_frames_num - 1);
     solver.step(sintel_frame_dt, mat4(1.0f), sintel_camera(s, camera_frame, true));
@@ -688,11 +691,60 @@ TEST(LodSolver, WardTablesSceneOnSintel)
           return is_finite(p);
         }));
     stretch = std::max(stretch, max_relative_stretch(s.offsets, s.positions, solver.positions()));
+    /* Placed strands stay out of the bust (LodSolver::push_out_of_bodies), as the groom is at
+     * rest: points deeper than 1% of the bust's size. */
+    const float tolerance = CollisionParams().penetration_tolerance * s.colliders->size_wo();
+    deepest_share = std::max(
+        deepest_share, s.colliders->penetration_stats(solver.positions(), tolerance, s.offsets)
+                           .share);
   }
+  const float rest_share =
+      s.colliders
+          ->penetration_stats(s.positions,
+                              CollisionParams().penetration_tolerance * s.colliders->size_wo(),
+                              s.offsets)
+          .share;
+  std::printf("points inside the bust: at most %.4f%% of them (at rest %.4f%%)\n",
+              100.0 * deepest_share, 100.0 * rest_share);
+  EXPECT_LE(deepest_share, 0.001f);
   const auto [far_seen, far_unseen] = mean_levels();
   std::printf("camera at 8 m: %lld skeletons; mean level %.2f seen (%.2f unseen); worst "
               "stretch %.2g\n",
               (long long)solver.active_num(), far_seen, far_unseen, double(stretch));
   EXPECT_LT(far_seen, close_seen);
   EXPECT_LT(stretch, 1e-4f);
+}
+
+/* A strand placed by its offset from a strip's or cluster's skeleton goes through the body
+ * where the skeleton bends toward it; the placed points are kept out of the colliders, as
+ * deep as at rest at most (LodSolver::push_out_of_bodies). Wind from above presses the hair
+ * onto the head; the camera far away keeps the coarsest strips. Exact depths (the head mesh),
+ * against the groom at rest. */
+TEST(LodSolver, PlacedStrandsStayOutOfTheHead)
+{
+  WindParams wind;
+  wind.speed = 6.0f;
+  wind.direction = vec3(0.0f, 0.0f, -1.0f);
+  for (const vec3 &eye : { far_eye, close_eye }) {
+    Scene scene(scene_params(), wind);
+    const float tolerance = 0.001f;
+    const PenetrationStats rest =
+        scene.colliders->penetration_stats(scene.groom.positions, tolerance, scene.groom.offsets);
+    float deepest = 0.0f, share = 0.0f;
+    for (int frame = 0; frame < 24; frame++) {
+      scene.step(eye);
+      const PenetrationStats now = scene.colliders->penetration_stats(
+          scene.solver.positions(), tolerance, scene.groom.offsets);
+      deepest = std::max(deepest, now.max_depth);
+      share = std::max(share, now.share);
+    }
+    std::printf("camera %s: deepest point %.2f mm, share deeper than 1 mm %.3f%% (at rest "
+                "%.2f mm, %.3f%%)\n",
+                eye == far_eye ? "far" : "close", 1000.0 * deepest, 100.0 * share,
+                1000.0 * rest.max_depth, 100.0 * rest.share);
+    /* Measured: far 0.54 mm and 0%, close 0.59 mm and 0% (the maps' surface lies within the
+     * faceted sphere's); placed as they fell: 34.8 mm and 12.2%, 10.4 mm and 4.7%. */
+    EXPECT_LT(deepest, rest.max_depth + 0.0015f);
+    EXPECT_LE(share, rest.share + 0.001f);
+  }
 }

@@ -5,6 +5,7 @@
 #include <limits>
 #include <utility>
 
+#include "collision/collider.hh"
 #include "core/parallel.hh"
 #include "groom/groom.hh"
 #include "lod/skinning_ward2003.hh"
@@ -71,6 +72,17 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
 void LodSolver::set_colliders(const ColliderSet *colliders, const CollisionParams &params)
 {
   solver_->set_colliders(colliders, params);
+  bodies_ = colliders;
+  rest_depths_.clear();
+  if (colliders != nullptr && colliders->colliders_num() > 0) {
+    /* The colliders where they are now: the groom's rest pose (as update_pass_volumes). */
+    const Span<vec3> rest = hierarchy_.rest_positions();
+    rest_depths_.resize(size_t(rest.size()));
+    contact_hit_.resize(size_t(rest.size()));
+    contact_normal_.resize(size_t(rest.size()));
+    contact_surface_.resize(size_t(rest.size()));
+    find_contacts(*colliders, rest, contact_hit_, rest_depths_, contact_normal_, contact_surface_);
+  }
   set_occluders(colliders);
 }
 
@@ -482,6 +494,97 @@ void LodSolver::place_strands(const float frame_dt)
       keep_segment_lengths(rest_lengths, placed, strands_in_group);
     }
   });
+  if (!rest_depths_.empty()) {
+    push_out_of_bodies();
+  }
+}
+
+void LodSolver::push_out_of_bodies()
+{
+  /* A strand placed by its offset from a skeleton goes where the skeleton takes it, through
+   * the body where the skeleton bends toward it (a strip's edge strands wrap a shoulder its
+   * middle clears): on Sintel's bust, 0.5-0.9% of the placed points lay more than 9 mm deep,
+   * the deepest 8-12 cm. Such a point moves out along the normal the skeletons' collision
+   * finds (the maps) until it is as deep as at rest; a strand that moved is then given back
+   * its segment lengths, which may take a point back in: those strands go once more (on a
+   * head pressed by wind from above the deepest point was then 0.7 mm, against 6 mm after
+   * one round and 35 mm without; a third round gave 0.67 mm). */
+  constexpr int push_rounds = 2;
+  const Span<int32_t> offsets = hierarchy_.curve_offsets();
+  for (int round = 0; round < push_rounds; round++) {
+    /* The first round queries every point where it is (strand k is strand k); the next ones
+     * the points of the strands that moved, gathered one after another. */
+    const bool every_strand = round == 0;
+    const int64_t strands_num = every_strand ? hierarchy_.strands_num() :
+                                               int64_t(push_strands_.size());
+    if (strands_num == 0) {
+      break;
+    }
+    if (!every_strand) {
+      push_offsets_.assign(1, 0);
+      for (const int32_t strand : push_strands_) {
+        push_offsets_.push_back(push_offsets_.back() +
+                                int32_t(curve_points(offsets, strand).size));
+      }
+      push_points_.resize(size_t(push_offsets_.back()));
+      for (int64_t k = 0; k < strands_num; k++) {
+        const IndexRange strand_points = curve_points(offsets, push_strands_[size_t(k)]);
+        std::copy_n(positions_wo_.begin() + strand_points.start, strand_points.size,
+                    push_points_.begin() + push_offsets_[size_t(k)]);
+      }
+    }
+    const Span<vec3> queried = every_strand ? Span<vec3>(positions_wo_) : Span<vec3>(push_points_);
+    const Span<int32_t> firsts = every_strand ? offsets : Span<int32_t>(push_offsets_);
+    const auto strand_of = [&](const int64_t k) {
+      return every_strand ? int32_t(k) : push_strands_[size_t(k)];
+    };
+    contact_hit_.resize(size_t(queried.size()));
+    contact_depth_.resize(size_t(queried.size()));
+    contact_normal_.resize(size_t(queried.size()));
+    contact_surface_.resize(size_t(queried.size()));
+    find_contacts(*bodies_, queried, contact_hit_, contact_depth_, contact_normal_,
+                  contact_surface_);
+    push_moved_.assign(size_t(strands_num), 0);
+    parallel_for(strands_num, 256, [&](const IndexRange range) {
+      for (int64_t k = range.start; k < range.one_after_last(); k++) {
+        const IndexRange strand_points = curve_points(offsets, strand_of(k));
+        for (int64_t i = 1; i < strand_points.size; i++) {
+          const size_t q = size_t(firsts[k] + i);
+          const size_t point = size_t(strand_points.start + i);
+          const float excess = contact_depth_[q] - rest_depths_[point];
+          /* Less than 1% of a segment deeper than at rest is left (a point near the scalp
+           * moves that much within the maps' surface as its skeleton sways). */
+          if (contact_hit_[q] && excess > 0.01f * rest_lengths_[point]) {
+            positions_wo_[point] += excess * contact_normal_[q];
+            push_moved_[size_t(k)] = 1;
+          }
+        }
+      }
+    });
+    push_next_.clear();
+    for (int64_t k = 0; k < strands_num; k++) {
+      if (push_moved_[size_t(k)]) {
+        push_next_.push_back(strand_of(k));
+      }
+    }
+    push_strands_.swap(push_next_);
+    const int64_t kept = int64_t(push_strands_.size());
+    /* The moved strands' lengths, four strands at a time (as place_strands). */
+    constexpr int64_t group = 4;
+    parallel_for((kept + group - 1) / group, 32, [&](const IndexRange groups) {
+      for (int64_t g = groups.start; g < groups.one_after_last(); g++) {
+        Span<float> rest_lengths[group];
+        MutableSpan<vec3> placed[group];
+        const int strands_in_group = int(std::min(group, kept - g * group));
+        for (int k = 0; k < strands_in_group; k++) {
+          const IndexRange points = curve_points(offsets, push_strands_[size_t(g * group + k)]);
+          rest_lengths[k] = Span<float>(rest_lengths_).slice(points.start, points.size);
+          placed[k] = MutableSpan<vec3>(positions_wo_.data() + points.start, points.size);
+        }
+        keep_segment_lengths(rest_lengths, placed, strands_in_group);
+      }
+    });
+  }
 }
 
 void LodSolver::step(const float frame_dt, const mat4 &head_to_world, const mat4 &view_projection)

@@ -144,6 +144,9 @@ class LodSolver {
   void select(const LodCamera &camera);
   void update_frames();
   void place_strands(float frame_dt);
+  /* Moves the placed strands' points that are deeper inside bodies_ than at rest out to that
+   * depth (roots stay), then gives the strands that moved back their segment lengths. */
+  void push_out_of_bodies();
   void set_active(int32_t node, bool active);
   /* `node` takes the dynamic state (angles, rates; slot 0 ignored) and is placed with the
    * head where the last step left it; a node whose nodes are current and whose state this
@@ -158,6 +161,9 @@ class LodSolver {
   HeadPose rest_pose_;
   mat3 head_rotation_{1.0f}; /* since rest, at the end of the last step */
   const ColliderSet *colliders_ = nullptr;
+  /* The colliders of set_colliders (not the occluders alone): placed strands stay out of
+   * them too. */
+  const ColliderSet *bodies_ = nullptr;
   float strand_radius_ = 0.0f; /* m, add_pass's */
 
   std::unique_ptr<StrandSolver> solver_;
@@ -183,6 +189,17 @@ class LodSolver {
   std::vector<int32_t> offset_nodes_;
   std::vector<float> rest_lengths_; /* m, from the previous point at rest (0 at roots) */
   std::vector<int32_t> point_levels_;
+  /* push_out_of_bodies's strands of a round (after the first) and of the next, their points
+   * (push_offsets_: per strand, its first), the points' contacts, and per strand whether it
+   * moved. */
+  std::vector<int32_t> push_strands_, push_next_, push_offsets_;
+  std::vector<vec3> push_points_;
+  std::vector<uint8_t> contact_hit_, push_moved_;
+  std::vector<float> contact_depth_;
+  /* m, per point: how deep inside bodies_ it lies at rest (the groom near the scalp lies
+   * within the collision maps' surface: it may stay as deep as that). */
+  std::vector<float> rest_depths_;
+  std::vector<vec3> contact_normal_, contact_surface_;
 
   int64_t splits_num_ = 0, merges_num_ = 0, collapses_num_ = 0;
   /* True until the first step after a reset. */
