@@ -550,20 +550,37 @@ void LodSolver::push_out_of_bodies()
                   MutableSpan<float>(contact_depth_.data(), n),
                   MutableSpan<vec3>(contact_normal_.data(), n),
                   MutableSpan<vec3>(contact_surface_.data(), n));
+    /* Push, then give the moved strands of each run of four their lengths (four at a time,
+     * as place_strands), while their points are in the cache. */
+    constexpr int64_t group = 4;
     push_moved_.assign(size_t(strands_num), 0);
-    parallel_for(strands_num, 256, [&](const IndexRange range) {
-      for (int64_t k = range.start; k < range.one_after_last(); k++) {
-        const IndexRange strand_points = curve_points(offsets, strand_of(k));
-        for (int64_t i = 1; i < strand_points.size; i++) {
-          const size_t q = size_t(firsts[k] + i);
-          const size_t point = size_t(strand_points.start + i);
-          const float excess = contact_depth_[q] - rest_depths_[point];
-          /* Less than 1% of a segment deeper than at rest is left (a point near the scalp
-           * moves that much within the maps' surface as its skeleton sways). */
-          if (contact_hit_[q] && excess > 0.01f * rest_lengths_[point]) {
-            positions_wo_[point] += excess * contact_normal_[q];
-            push_moved_[size_t(k)] = 1;
+    parallel_for((strands_num + group - 1) / group, 64, [&](const IndexRange groups) {
+      for (int64_t g = groups.start; g < groups.one_after_last(); g++) {
+        Span<float> rest_lengths[group];
+        MutableSpan<vec3> moved[group];
+        int moved_num = 0;
+        for (int64_t k = g * group; k < std::min((g + 1) * group, strands_num); k++) {
+          const IndexRange strand_points = curve_points(offsets, strand_of(k));
+          for (int64_t i = 1; i < strand_points.size; i++) {
+            const size_t q = size_t(firsts[k] + i);
+            const size_t point = size_t(strand_points.start + i);
+            const float excess = contact_depth_[q] - rest_depths_[point];
+            /* Less than 1% of a segment deeper than at rest is left (a point near the scalp
+             * moves that much within the maps' surface as its skeleton sways). */
+            if (contact_hit_[q] && excess > 0.01f * rest_lengths_[point]) {
+              positions_wo_[point] += excess * contact_normal_[q];
+              push_moved_[size_t(k)] = 1;
+            }
           }
+          if (push_moved_[size_t(k)]) {
+            rest_lengths[moved_num] =
+                Span<float>(rest_lengths_).slice(strand_points.start, strand_points.size);
+            moved[moved_num++] =
+                MutableSpan<vec3>(positions_wo_.data() + strand_points.start, strand_points.size);
+          }
+        }
+        if (moved_num > 0) {
+          keep_segment_lengths(rest_lengths, moved, moved_num);
         }
       }
     });
@@ -574,22 +591,6 @@ void LodSolver::push_out_of_bodies()
       }
     }
     push_strands_.swap(push_next_);
-    const int64_t kept = int64_t(push_strands_.size());
-    /* The moved strands' lengths, four strands at a time (as place_strands). */
-    constexpr int64_t group = 4;
-    parallel_for((kept + group - 1) / group, 32, [&](const IndexRange groups) {
-      for (int64_t g = groups.start; g < groups.one_after_last(); g++) {
-        Span<float> rest_lengths[group];
-        MutableSpan<vec3> placed[group];
-        const int strands_in_group = int(std::min(group, kept - g * group));
-        for (int k = 0; k < strands_in_group; k++) {
-          const IndexRange points = curve_points(offsets, push_strands_[size_t(g * group + k)]);
-          rest_lengths[k] = Span<float>(rest_lengths_).slice(points.start, points.size);
-          placed[k] = MutableSpan<vec3>(positions_wo_.data() + points.start, points.size);
-        }
-        keep_segment_lengths(rest_lengths, placed, strands_in_group);
-      }
-    });
   }
 }
 
