@@ -45,18 +45,18 @@ void accumulate_hair_interactions(const Span<vec3> positions, const Span<vec3> v
       float damping = 0.0f;
       for (const int32_t j : neighbors.neighbors_of(i)) {
         const vec3 x_ij = positions[j] - positions[i];
-        const float r = glm::length(x_ij);
-        if (!(r > 0.0f && r < 2.0f * h)) { /* The list may hold particles beyond 2h. */
+        const float r_sq = glm::dot(x_ij, x_ij);
+        if (!(r_sq > 0.0f && r_sq < 4.0f * h * h)) { /* The list may hold particles beyond 2h. */
           continue;
         }
+        const float r = std::sqrt(r_sq);
         if (settings.attraction_repulsion) {
-          /* Bando 2003, eq. 16 with P = k_a (ρ − ρ₀). */
+          /* Bando 2003, eq. 16 with P = k_a (ρ − ρ₀); ∇_i W = −W'(r) x_ij / r. */
           const float pressure_j =
               settings.pressure_stiffness * (density[j] - settings.rest_density);
-          force -=
-              masses[i] * masses[j] *
-              (pressure_i / (density[i] * density[i]) + pressure_j / (density[j] * density[j])) *
-              sph_kernel_gradient_i(x_ij, h);
+          force += masses[i] * masses[j] *
+                   (pressure_i / (density[i] * density[i]) + pressure_j / (density[j] * density[j])) *
+                   (sph_kernel_derivative(r, h) / r) * x_ij;
         }
         if (!settings.collision && !settings.friction) {
           continue;
@@ -66,17 +66,18 @@ void accumulate_hair_interactions(const Span<vec3> positions, const Span<vec3> v
          * response does not depend on the particle count (symmetric in i, j). */
         const float weight = w * masses[i] * 2.0f * masses[j] / (density[i] + density[j]);
         const vec3 v_ij = velocities[j] - velocities[i];
-        /* Collision direction d_n = t_i × t_j, or for nearly collinear hair the part of x_ij
-         * normal to t_i (§3.4). */
+        /* Collision direction d_n = t_i × t_j, or for nearly collinear hair (|t_i × t_j| <
+         * 0.1) the part of x_ij normal to t_i (§3.4). */
         vec3 d_n = glm::cross(directions[i], directions[j]);
-        if (glm::length(d_n) < 0.1f) {
+        float d_n_sq = glm::dot(d_n, d_n);
+        if (d_n_sq < 0.01f) {
           d_n = x_ij - glm::dot(x_ij, directions[i]) * directions[i];
+          d_n_sq = glm::dot(d_n, d_n);
         }
-        const float d_n_len = glm::length(d_n);
-        if (d_n_len < 1e-12f) {
+        if (d_n_sq < 1e-24f) {
           continue;
         }
-        d_n /= d_n_len;
+        d_n /= std::sqrt(d_n_sq);
         const float v_n = glm::dot(v_ij, d_n);
         if (settings.collision && glm::dot(x_ij, d_n) * v_n < 0.0f) {
           /* Bando 2003, eq. 17: approaching hair loses its normal relative velocity. */
@@ -84,12 +85,11 @@ void accumulate_hair_interactions(const Span<vec3> positions, const Span<vec3> v
           damping += settings.collision_damping * weight;
         }
         if (settings.friction) {
-          vec3 d_t = v_ij - v_n * d_n;
-          const float d_t_len = glm::length(d_t);
-          if (d_t_len > 1e-12f) {
-            d_t /= d_t_len;
-            /* Bando 2003, eq. 18. */
-            damped_force += settings.friction_damping * weight * glm::dot(v_ij, d_t) * d_t;
+          /* Bando 2003, eq. 18: (v_ij · d_t) d_t with d_t the unit tangential relative
+           * velocity, which is that velocity itself. */
+          const vec3 v_t = v_ij - v_n * d_n;
+          if (glm::dot(v_t, v_t) > 1e-24f) {
+            damped_force += settings.friction_damping * weight * v_t;
             damping += settings.friction_damping * weight;
           }
         }
