@@ -54,9 +54,10 @@ void accumulate_hair_interactions(const Span<vec3> positions, const Span<vec3> v
           /* Bando 2003, eq. 16 with P = k_a (ρ − ρ₀); ∇_i W = −W'(r) x_ij / r. */
           const float pressure_j =
               settings.pressure_stiffness * (density[j] - settings.rest_density);
-          force += masses[i] * masses[j] *
-                   (pressure_i / (density[i] * density[i]) + pressure_j / (density[j] * density[j])) *
-                   (sph_kernel_derivative(r, h) / r) * x_ij;
+          force +=
+              masses[i] * masses[j] *
+              (pressure_i / (density[i] * density[i]) + pressure_j / (density[j] * density[j])) *
+              (sph_kernel_derivative(r, h) / r) * x_ij;
         }
         if (!settings.collision && !settings.friction) {
           continue;
