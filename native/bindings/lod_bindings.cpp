@@ -117,8 +117,14 @@ void bind_lod(py::module_ &m)
             self.set_colliders(colliders, params);
           },
           py::arg("colliders"), py::arg("params") = CollisionParams(), py::keep_alive<1, 2>(),
-          "Collide every skeleton with a ColliderSet (kept alive by the solver) and let it hide "
-          "hair from the camera; None for neither.")
+          "Collide every skeleton with a ColliderSet (kept alive by the solver), let it hide "
+          "hair from the camera and keep the placed strands out of it; None for none of them.")
+      .def(
+          "set_bodies",
+          [](LodSolver &self, const ColliderSet *bodies) { self.set_bodies(bodies); },
+          py::arg("bodies"), py::keep_alive<1, 2>(),
+          "Keep the placed strands out of a ColliderSet (kept alive by the solver), as deep as "
+          "at rest at most, when the skeletons collide by a pass instead; None for none.")
       .def(
           "set_occluders",
           [](LodSolver &self, const ColliderSet *occluders) { self.set_occluders(occluders); },

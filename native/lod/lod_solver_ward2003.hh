@@ -56,9 +56,14 @@ class LodSolver {
             const StrandParams &strand_params, const WindParams &wind,
             const LodParams &lod_params);
 
-  /* Hair-object collision of every skeleton (see StrandSolver::set_colliders), and the
-   * bodies that occlude hair (§6.1). nullptr: neither. */
+  /* Hair-object collision of every skeleton (see StrandSolver::set_colliders), the bodies
+   * that occlude hair (§6.1), and the bodies the placed strands stay out of (set_bodies).
+   * nullptr: none of them. */
   void set_colliders(const ColliderSet *colliders, const CollisionParams &params);
+  /* Only the bodies the placed strands stay out of, as deep as at rest at most (by their
+   * collision maps, after each placement), when the skeletons collide by a pass instead; the
+   * bodies where they are now are the groom's rest pose. nullptr: none. */
+  void set_bodies(const ColliderSet *bodies);
   /* Only the bodies that occlude hair (when the skeletons collide by a pass instead); they
    * also give the passes' rest clearances. */
   void set_occluders(const ColliderSet *occluders)
@@ -161,9 +166,7 @@ class LodSolver {
   HeadPose rest_pose_;
   mat3 head_rotation_{1.0f}; /* since rest, at the end of the last step */
   const ColliderSet *colliders_ = nullptr;
-  /* The colliders of set_colliders (not the occluders alone): placed strands stay out of
-   * them too. */
-  const ColliderSet *bodies_ = nullptr;
+  const ColliderSet *bodies_ = nullptr; /* set_bodies' */
   float strand_radius_ = 0.0f; /* m, add_pass's */
 
   std::unique_ptr<StrandSolver> solver_;

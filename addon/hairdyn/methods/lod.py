@@ -229,12 +229,14 @@ class LodStrands(Attached):
         return self.solver.pass_ms(name)
 
     def set_colliders(self, colliders, params):
-        """Every skeleton collides (and the colliders hide hair from the camera, §6.1); the
-        fine reference collides the same way. None after colliders were set (body collision
-        by swept spheres only): the maps are off, and the colliders still hide hair."""
+        """Every skeleton collides (and the colliders hide hair from the camera, §6.1, and the
+        placed strands stay out of them); the fine reference collides the same way. None after
+        colliders were set (body collision by swept spheres only): the maps are off for the
+        skeletons, and the colliders still hide hair and keep the placed strands out."""
         if colliders is None and self.colliders is not None:
             self.solver.set_colliders(None, params)
             self.solver.set_occluders(self.colliders)
+            self.solver.set_bodies(self.colliders)
         else:
             self.solver.set_colliders(colliders, params)
             self.colliders = colliders
