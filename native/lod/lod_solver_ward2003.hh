@@ -149,8 +149,8 @@ class LodSolver {
   void select(const LodCamera &camera);
   void update_frames();
   void place_strands(float frame_dt);
-  /* Moves the placed strands' points that are deeper inside bodies_ than at rest out to that
-   * depth (roots stay), then gives the strands that moved back their segment lengths. */
+  /* Moves the placed strands' points that are deeper inside bodies_ than at rest back out
+   * (roots stay), then gives the strands that moved back their segment lengths. */
   void push_out_of_bodies();
   void set_active(int32_t node, bool active);
   /* `node` takes the dynamic state (angles, rates; slot 0 ignored) and is placed with the
