@@ -193,6 +193,9 @@ class LcpSolver {
   std::vector<float> density_, k_, alpha_k_, side_sums_, damping_;
   int substeps_used_ = 0, spring_iterations_ = 0, spring_products_ = 0;
   ImplicitSprings implicit_springs_;
+  /* The implicit solve's coarse factor is rebuilt every coarse_factor_frames frames. */
+  static constexpr int coarse_factor_frames = 4;
+  int frames_since_coarse_factor_ = coarse_factor_frames;
   DensityJacobian pressure_jacobian_; /* eq. 16's stiffness, when implicit */
   std::vector<vec3> forces_, damped_forces_;
   std::vector<vec3> x_start_;     /* positions at the substep's start */
