@@ -83,11 +83,22 @@ void LodSolver::set_bodies(const ColliderSet *bodies)
   if (bodies != nullptr && bodies->colliders_num() > 0) {
     const Span<vec3> rest = hierarchy_.rest_positions();
     rest_depths_.resize(size_t(rest.size()));
-    contact_hit_.resize(size_t(rest.size()));
-    contact_normal_.resize(size_t(rest.size()));
-    contact_surface_.resize(size_t(rest.size()));
-    find_contacts(*bodies, rest, contact_hit_, rest_depths_, contact_normal_, contact_surface_);
+    find_body_contacts(rest, rest_depths_);
   }
+}
+
+void LodSolver::find_body_contacts(const Span<vec3> points, const MutableSpan<float> r_depths)
+{
+  /* The buffers keep their largest size (shrinking and growing them again would clear 8 MB a
+   * frame on Sintel's groom). */
+  const int64_t n = points.size();
+  const auto grow = [&](auto &buffer) { buffer.resize(std::max(buffer.size(), size_t(n))); };
+  grow(contact_hit_);
+  grow(contact_normal_);
+  grow(contact_surface_);
+  find_contacts(*bodies_, points, MutableSpan<uint8_t>(contact_hit_.data(), n), r_depths,
+                MutableSpan<vec3>(contact_normal_.data(), n),
+                MutableSpan<vec3>(contact_surface_.data(), n));
 }
 
 void LodSolver::add_pass(SubstepPass *const pass, const float strand_radius)
@@ -543,18 +554,8 @@ void LodSolver::push_out_of_bodies()
     const auto strand_of = [&](const int64_t k) {
       return every_strand ? int32_t(k) : push_strands_[size_t(k)];
     };
-    /* The contact buffers keep the first round's size (shrinking and growing them again
-     * would clear 8 MB a frame on Sintel's groom). */
-    const int64_t n = queried.size();
-    const auto grow = [&](auto &buffer) { buffer.resize(std::max(buffer.size(), size_t(n))); };
-    grow(contact_hit_);
-    grow(contact_depth_);
-    grow(contact_normal_);
-    grow(contact_surface_);
-    find_contacts(*bodies_, queried, MutableSpan<uint8_t>(contact_hit_.data(), n),
-                  MutableSpan<float>(contact_depth_.data(), n),
-                  MutableSpan<vec3>(contact_normal_.data(), n),
-                  MutableSpan<vec3>(contact_surface_.data(), n));
+    contact_depth_.resize(std::max(contact_depth_.size(), size_t(queried.size())));
+    find_body_contacts(queried, MutableSpan<float>(contact_depth_.data(), queried.size()));
     /* Push, then give the moved strands of each run of four their lengths (four at a time,
      * as place_strands), while their points are in the cache. */
     constexpr int64_t group = 4;

@@ -152,6 +152,9 @@ class LodSolver {
   /* Moves the placed strands' points that are deeper inside bodies_ than at rest back out
    * (roots stay), then gives the strands that moved back their segment lengths. */
   void push_out_of_bodies();
+  /* find_contacts of `points` against bodies_: depths into r_depths, the rest into the
+   * contact_ buffers. */
+  void find_body_contacts(Span<vec3> points, MutableSpan<float> r_depths);
   void set_active(int32_t node, bool active);
   /* `node` takes the dynamic state (angles, rates; slot 0 ignored) and is placed with the
    * head where the last step left it; a node whose nodes are current and whose state this
@@ -193,8 +196,8 @@ class LodSolver {
   std::vector<float> rest_lengths_; /* m, from the previous point at rest (0 at roots) */
   std::vector<int32_t> point_levels_;
   /* push_out_of_bodies's strands of a round (after the first) and of the next, their points
-   * (push_offsets_: per strand, its first), the points' contacts, and per strand whether it
-   * moved. */
+   * (push_offsets_: per strand, its first), the points' contacts (find_body_contacts), and per
+   * strand whether it moved. */
   std::vector<int32_t> push_strands_, push_next_, push_offsets_;
   std::vector<vec3> push_points_;
   std::vector<uint8_t> contact_hit_, push_moved_;
