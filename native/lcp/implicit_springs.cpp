@@ -276,9 +276,11 @@ int ImplicitSprings::first_guess()
     /* A fixed particle has no unknown (the product takes its Δv as 0). */
     p.resize(size_t(n));
     product.resize(size_t(n));
-    for (int64_t i = 0; i < n; i++) {
-      p[size_t(i)] = is_fixed_[i] ? vec3(0.0f) : history_[k][size_t(i)];
-    }
+    parallel_for(n, grain, [&](const IndexRange range) {
+      for (int64_t i = range.start; i < range.one_after_last(); i++) {
+        p[size_t(i)] = is_fixed_[i] ? vec3(0.0f) : history_[k][size_t(i)];
+      }
+    });
     const double energy = multiply_dot(p, product);
     /* A-orthogonal to the basis so far (Gram-Schmidt in the A inner product); dropped when
      * what is left of it is rounding. */
