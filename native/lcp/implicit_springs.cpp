@@ -313,9 +313,7 @@ ImplicitSprings::Result ImplicitSprings::step(
   if (pressure != nullptr) {
     pressure_rates(r_velocities); /* for −Δt² K_p v */
   }
-  axis_.resize(size_t(pairs_num));
-  along_.resize(size_t(pairs_num));
-  across_.resize(size_t(pairs_num));
+  pair_terms_.resize(size_t(pairs_num));
   for (std::vector<vec3> *buffer :
        { &rhs_, &dv_, &residual_, &preconditioned_, &direction_, &product_ })
   {
@@ -328,28 +326,26 @@ ImplicitSprings::Result ImplicitSprings::step(
   }
 
   /* Pair blocks Δt C + Δt² K, and the spring forces of the step's start. */
-  stretch_force_.resize(size_t(pairs_num));
-  lateral_.resize(size_t(pairs_num));
   parallel_for(pairs_num, grain, [&](const IndexRange range) {
     for (int64_t p = range.start; p < range.one_after_last(); p++) {
       const int32_t a = connections.root[size_t(p)], b = connections.tip[size_t(p)];
       const vec3 x_ab = positions[b] - positions[a];
       const float r = glm::length(x_ab);
       const float ak = alpha_k[p];
+      PairTerms &terms = pair_terms_[size_t(p)];
       if (r <= 0.0f || ak <= 0.0f) {
-        axis_[size_t(p)] = vec3(0.0f);
-        along_[size_t(p)] = across_[size_t(p)] = 0.0f;
-        stretch_force_[size_t(p)] = lateral_[size_t(p)] = 0.0f;
+        terms = { vec3(0.0f), 0.0f, 0.0f, 0.0f, ak, 0.0f };
         continue;
       }
       const float l = connections.rest_length[size_t(p)];
       const float lateral = std::max(0.0f, 1.0f - l / r); /* PSD part of K's lateral term. */
-      lateral_[size_t(p)] = lateral;
-      axis_[size_t(p)] = x_ab / r;
-      along_[size_t(p)] = dt * damping_time * ak + dt * dt * ak * (1.0f - lateral);
-      across_[size_t(p)] = dt * dt * ak * lateral;
+      terms.axis = x_ab / r;
+      terms.along = dt * damping_time * ak + dt * dt * ak * (1.0f - lateral);
+      terms.across = dt * dt * ak * lateral;
       /* Elastic force on the root end, along x̂ (§3.3): α_ij k_ij (‖x_ij‖ − l_ij). */
-      stretch_force_[size_t(p)] = ak * (r - l);
+      terms.stretch_force = ak * (r - l);
+      terms.alpha_k = ak;
+      terms.lateral = lateral;
     }
   });
 
@@ -369,17 +365,18 @@ ImplicitSprings::Result ImplicitSprings::step(
       {
         const int32_t code = connections.particle_pairs[size_t(k)];
         const int32_t p = code >> 1;
-        const vec3 &axis = axis_[size_t(p)];
+        const PairTerms &terms = pair_terms_[size_t(p)];
+        const vec3 &axis = terms.axis;
         /* x̂_ij points from i to its partner j. */
         const vec3 x_hat = (code & 1) ? -axis : axis;
         const int32_t j = connections.partner(code);
         const vec3 v_ij = r_velocities[j] - v_i;
-        const float ak = alpha_k[p], lateral = lateral_[size_t(p)];
+        const float ak = terms.alpha_k, lateral = terms.lateral;
         /* Damped spring (§3.3): elastic α k (r − l) x̂ and damping γ α k (v_ij · x̂) x̂. */
-        force += (stretch_force_[size_t(p)] + damping_time * ak * glm::dot(v_ij, x_hat)) * x_hat;
+        force += (terms.stretch_force + damping_time * ak * glm::dot(v_ij, x_hat)) * x_hat;
         /* K (v_i − v_j) of this pair. */
         stiff_v -= ak * ((1.0f - lateral) * glm::dot(axis, v_ij) * axis + lateral * v_ij);
-        entries_[size_t(k)] = { j, along_[size_t(p)], across_[size_t(p)], axis };
+        entries_[size_t(k)] = { j, terms.along, terms.across, axis };
         diagonal += entries_[size_t(k)].block();
       }
       rhs_[size_t(i)] = dt * (force - dt * stiff_v);

@@ -106,11 +106,15 @@ class ImplicitSprings {
   std::vector<float> pressure_rates_;
   Span<float> masses_;
   Span<uint8_t> is_fixed_;
-  /* Pair block Δt C_ij + Δt² K_ij = along x̂x̂ᵀ + across I. */
-  std::vector<vec3> axis_;
-  std::vector<float> along_, across_;
-  /* α_ij k_ij (‖x_ij‖ − l_ij), and max(0, 1 − l/r) of K's lateral term. */
-  std::vector<float> stretch_force_, lateral_;
+  /* Per pair, what the rows of both its particles read, side by side (one cache line: the
+   * rows gather them by pair): the block Δt C_ij + Δt² K_ij = along x̂x̂ᵀ + across I, the
+   * elastic force α_ij k_ij (‖x_ij‖ − l_ij), α_ij k_ij, and max(0, 1 − l/r) of K's lateral
+   * term. */
+  struct PairTerms {
+    vec3 axis;
+    float along, across, stretch_force, alpha_k, lateral;
+  };
+  std::vector<PairTerms> pair_terms_;
   /* The pair blocks again, in each particle's row (LcpConnections::particle_pairs order), so
    * that the product streams through memory. */
   struct Entry {
