@@ -462,8 +462,8 @@ void LodSolver::place_strands(const float frame_dt)
   const float tau = lod_params_.transition_time;
   const float decay = tau > 0.0f ? std::exp(-frame_dt / tau) : 0.0f;
   const Span<int32_t> offsets = hierarchy_.curve_offsets();
-  /* Strands four at a time: keep_segment_lengths overlaps their chains. */
-  constexpr int64_t group = 4;
+  /* Strands keep_lengths_group at a time: keep_segment_lengths overlaps their chains. */
+  constexpr int64_t group = keep_lengths_group;
   const int64_t strands_num = hierarchy_.strands_num();
   parallel_for((strands_num + group - 1) / group, 32, [&](const IndexRange groups) {
     for (int64_t g = groups.start; g < groups.one_after_last(); g++) {
@@ -556,9 +556,9 @@ void LodSolver::push_out_of_bodies()
     };
     contact_depth_.resize(std::max(contact_depth_.size(), size_t(queried.size())));
     find_body_contacts(queried, MutableSpan<float>(contact_depth_.data(), queried.size()));
-    /* Push, then give the moved strands of each run of four their lengths (four at a time,
-     * as place_strands), while their points are in the cache. */
-    constexpr int64_t group = 4;
+    /* Push, then give the moved strands of each run of keep_lengths_group their lengths
+     * (together, as place_strands), while their points are in the cache. */
+    constexpr int64_t group = keep_lengths_group;
     push_moved_.assign(size_t(strands_num), 0);
     parallel_for((strands_num + group - 1) / group, 64, [&](const IndexRange groups) {
       for (int64_t g = groups.start; g < groups.one_after_last(); g++) {

@@ -93,7 +93,7 @@ void keep_segment_lengths(const Span<float> rest_lengths, const MutableSpan<vec3
 void keep_segment_lengths(const Span<float> *rest_lengths, const MutableSpan<vec3> *r_positions_wo,
                           const int strands_num)
 {
-  assert(strands_num <= 4);
+  assert(strands_num <= keep_lengths_group);
   int64_t points_num = 0;
   for (int s = 0; s < strands_num; s++) {
     points_num = std::max(points_num, r_positions_wo[s].size());

@@ -40,8 +40,9 @@ void skin_strand(const LodHierarchy &hierarchy, int64_t strand, Span<vec3> offse
  * segments' frames; on wide strips that is several times a segment. `rest_lengths` holds each
  * point's distance to the previous point at rest (the root's is unused). */
 void keep_segment_lengths(Span<float> rest_lengths, MutableSpan<vec3> r_positions_wo);
-/* The same for up to four strands at once (faster: their serial chains overlap), each with the
- * same result as alone. */
+/* The same for up to keep_lengths_group strands at once (faster: their serial chains of a
+ * square root and a division per point overlap), each with the same result as alone. */
+constexpr int keep_lengths_group = 8;
 void keep_segment_lengths(const Span<float> *rest_lengths, const MutableSpan<vec3> *r_positions_wo,
                           int strands_num);
 
