@@ -235,7 +235,7 @@ void Collider::rebuild(const Span<vec3> vertices_object)
 void Collider::set_transform(const mat4 &object_to_world)
 {
   object_to_world_ = object_to_world;
-  const mat4 world_to_object = glm::inverse(object_to_world);
+  world_to_object_ = glm::inverse(object_to_world);
   /* Similarity test: the columns of the linear part are orthogonal and of equal length. */
   const mat3 linear(object_to_world);
   const mat3 gram = glm::transpose(linear) * linear;
@@ -250,7 +250,7 @@ void Collider::set_transform(const mat4 &object_to_world)
   for (Part &part : parts_) {
     const MapFrame &frame = part.map.frame();
     const mat4 map_to_world = object_to_world * frame.map_to_object();
-    part.world_to_map = Affine::from(frame.object_to_map() * world_to_object);
+    part.world_to_map = Affine::from(frame.object_to_map() * world_to_object_);
     part.map_to_world = Affine::from(map_to_world);
     part.normal_to_world = glm::transpose(glm::inverse(mat3(map_to_world)));
   }

@@ -318,6 +318,7 @@ class Collider {
   float size() const { return size_; }
   float size_wo() const { return size_ * uniform_scale(object_to_world_); }
   const mat4 &object_to_world() const { return object_to_world_; }
+  const mat4 &world_to_object() const { return world_to_object_; }
   const MeshDistance &exact() const { return exact_; }
   /* What ColliderMesh reported at construction, for the caller to warn about. */
   int64_t boundary_edges_num() const { return boundary_edges_num_; }
@@ -407,6 +408,7 @@ class Collider {
   MeshDistance exact_;
   float size_ = 0.0f;
   mat4 object_to_world_{ 1.0f };
+  mat4 world_to_object_{ 1.0f }; /* its inverse */
   float similarity_scale_ = 1.0f; /* Uniform scale of object_to_world_, 0 if not a similarity. */
   double build_ms_ = 0.0;
   int64_t boundary_edges_num_ = 0;

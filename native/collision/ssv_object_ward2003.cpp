@@ -341,7 +341,8 @@ void SsvObjectPass::apply(const SubstepState &state)
     const mat4 &m = body.collider->object_to_world();
     const mat4 previous = body.has_previous ? body.previous_object_to_world : m;
     const float scale = uniform_scale(m);
-    frames.push_back({glm::inverse(m), glm::inverse(previous), mat3(m) / scale, scale});
+    frames.push_back(
+        {body.collider->world_to_object(), glm::inverse(previous), mat3(m) / scale, scale});
   }
   const Span<int32_t> offsets = state.curve_offsets;
   const float h = state.h;
@@ -524,10 +525,9 @@ float segment_penetration_share(const Span<int32_t> curve_offsets, const Span<ve
         bool cuts = false;
         for (int64_t i = 0; i < colliders.colliders_num() && !cuts; i++) {
           const Collider &collider = colliders.collider(i);
-          const mat4 world_to_object = glm::inverse(collider.object_to_world());
           const float tolerance = tolerance_wo / uniform_scale(collider.object_to_world());
-          const vec3 a = transform_point(world_to_object, positions_wo[k]);
-          const vec3 b = transform_point(world_to_object, positions_wo[k + 1]);
+          const vec3 a = transform_point(collider.world_to_object(), positions_wo[k]);
+          const vec3 b = transform_point(collider.world_to_object(), positions_wo[k + 1]);
           const int samples = 1 + int(std::ceil(glm::length(b - a) / (0.25f * tolerance)));
           for (int j = 0; j <= samples && !cuts; j++) {
             cuts = collider.exact().depth(glm::mix(a, b, float(j) / float(samples))) > tolerance;

@@ -125,8 +125,8 @@ void LodSolver::update_pass_volumes()
   for (int64_t c = 0; c < (volumes.rest_clearances.empty() ? 0 : colliders_->colliders_num());
        c++)
   {
-    const mat4 &to_world = colliders_->collider(c).object_to_world();
-    to_objects.emplace_back(glm::inverse(to_world), uniform_scale(to_world));
+    const Collider &collider = colliders_->collider(c);
+    to_objects.emplace_back(collider.world_to_object(), uniform_scale(collider.object_to_world()));
   }
   parallel_for(hierarchy_.nodes_num(), 64, [&](const IndexRange range) {
     for (int64_t node = range.start; node < range.one_after_last(); node++) {

@@ -76,9 +76,8 @@ bool hidden_by_colliders(const ColliderSet &colliders, const vec3 &eye_wo, const
     if (bvh.is_empty()) {
       continue;
     }
-    const mat4 world_to_object = glm::inverse(collider.object_to_world());
-    const vec3 origin = transform_point(world_to_object, eye_wo);
-    const vec3 target = transform_point(world_to_object, point_wo);
+    const vec3 origin = transform_point(collider.world_to_object(), eye_wo);
+    const vec3 target = transform_point(collider.world_to_object(), point_wo);
     if (bvh.ray_hits_any(origin, target - origin, t_max)) {
       return true;
     }
