@@ -300,23 +300,6 @@ template<int W> LaneScratch<W> &lane_scratch()
   return scratch;
 }
 
-/* What the colliders say of each of scratch.tips, into scratch.hit, depth, normal and surface,
- * in one batched query. */
-template<int W> void query_tips(const ColliderSet &colliders, LaneScratch<W> &scratch)
-{
-  if (scratch.contact_batch == nullptr) {
-    scratch.contact_batch.reset(new ContactBatch<map_batch_size>);
-    scratch.map_batch.reset(new MapBatch<map_batch_size>);
-  }
-  const size_t size = scratch.tips.size();
-  scratch.hit.resize(size);
-  scratch.depth.resize(size);
-  scratch.normal.resize(size);
-  scratch.surface.resize(size);
-  find_contacts_serial(colliders, scratch.tips, scratch.hit, scratch.depth, scratch.normal,
-                       scratch.surface, *scratch.contact_batch, *scratch.map_batch);
-}
-
 
 /* The reaction constraint (Kurihara 1993, eq. 12–15) on the rods whose tips pass 1 put inside
  * a collider, for the lanes `queried`: every tip of the step in one query (queried segment by
@@ -343,7 +326,16 @@ void add_contact_forces(const ColliderSet &colliders, const ReactionConstants &s
   if (tips.empty()) {
     return;
   }
-  query_tips(colliders, scratch);
+  if (scratch.contact_batch == nullptr) {
+    scratch.contact_batch.reset(new ContactBatch<map_batch_size>);
+    scratch.map_batch.reset(new MapBatch<map_batch_size>);
+  }
+  scratch.hit.resize(tips.size());
+  scratch.depth.resize(tips.size());
+  scratch.normal.resize(tips.size());
+  scratch.surface.resize(tips.size());
+  find_contacts_serial(colliders, tips, scratch.hit, scratch.depth, scratch.normal,
+                       scratch.surface, *scratch.contact_batch, *scratch.map_batch);
   size_t q = 0;
   for (size_t i = 0; i < n; i++) {
     for (int lane = 0; lane < W; lane++) {
@@ -814,57 +806,21 @@ template<int W>
     }
     put(node, lane, positions_wo_[first[lane] - 1]);
   }
-  /* Segment i's chart (its parent's frame turned by its rest rotation) and its angles' sines
-   * and cosines, from the parent's frame. */
-  const auto segment_chart = [&](const size_t i, const M3<Floats> &parent, Floats *r_trig)
-                                 HAIRDYN_CHAIN_INLINE_LAMBDA {
+  bool keep_direction[W] = {};
+  vec3 kept_direction[W];
+  for (size_t i = 0; i < n; i++) {
     const float *angle_records[W];
     for (int lane = 0; lane < W; lane++) {
       angle_records[lane] = &angles_[first[lane] + i].x;
     }
     V2<Floats> q;
     chain::gather2(angle_records, q);
-    sin_cos<Floats, chain::Ints<W>>(q.x, r_trig[0], r_trig[1]);
-    sin_cos<Floats, chain::Ints<W>>(q.y, r_trig[2], r_trig[3]);
-    const M3<Floats> &rest = terms[i].rest;
-    return M3<Floats>{{parent * rest.c[0], parent * rest.c[1], parent * rest.c[2]}};
-  };
-  /* The tips' contacts in one query: every tip where the step puts it if no projection moves
-   * it (a lane's tips up to its first projection, the same bits), the commit then querying
-   * segment by segment only where a lane has projected (a third of the segments on Sintel's
-   * bust; all of them queried segment by segment, eight tips at a time, its groom stepped
-   * 3-5% slower). */
-  size_t lane_rank[W];
-  size_t ranked = 0;
-  for (int lane = 0; lane < W; lane++) {
-    lane_rank[lane] = ranked;
-    ranked += lanes[lane] ? 1 : 0;
-  }
-  if (colliders_ != nullptr && ranked > 0) {
-    std::vector<vec3> &tips = scratch.tips;
-    tips.resize(n * ranked);
-    M3<Floats> unprojected = frame;
-    V3<Floats> at = node;
-    for (size_t i = 0; i < n; i++) {
-      Floats trig[4];
-      const M3<Floats> chart = segment_chart(i, unprojected, trig);
-      rotate_chart(trig[0], trig[1], trig[2], trig[3], chart.c, unprojected.c);
-      at = at + terms[i].d * unprojected.c[2];
-      for (int lane = 0; lane < W; lane++) {
-        if (lanes[lane]) {
-          tips[i * ranked + lane_rank[lane]] = get(at, lane);
-        }
-      }
-    }
-    query_tips(*colliders_, scratch);
-  }
-  bool projected_any[W] = {}; /* a projection moved the lane's tips: query them one by one */
-  bool keep_direction[W] = {};
-  vec3 kept_direction[W];
-  for (size_t i = 0; i < n; i++) {
     Floats trig[4];
+    sin_cos<Floats, chain::Ints<W>>(q.x, trig[0], trig[1]);
+    sin_cos<Floats, chain::Ints<W>>(q.y, trig[2], trig[3]);
+    const M3<Floats> &rest = terms[i].rest;
     const Floats &d = terms[i].d;
-    const M3<Floats> chart = segment_chart(i, frame, trig);
+    const M3<Floats> chart{{frame * rest.c[0], frame * rest.c[1], frame * rest.c[2]}};
     for (int lane = 0; lane < W; lane++) {
       if (keep_direction[lane]) {
         keep_direction[lane] = false;
@@ -879,9 +835,7 @@ template<int W>
     rotate_chart(trig[0], trig[1], trig[2], trig[3], chart.c, frame.c);
     V3<Floats> tip = node + d * frame.c[2];
     ContactBatch<8> contacts;
-    if (std::any_of(projected_any, projected_any + W, [](const bool b) { return b; })) {
-      find_lane_contacts(colliders_, tip, contacts);
-    }
+    find_lane_contacts(colliders_, tip, contacts);
     for (int lane = 0; lane < W; lane++) {
       if (!lanes[lane]) {
         continue;
@@ -893,16 +847,10 @@ template<int W>
       Contact contact;
       vec2 stopped_rates; /* the projection's zeros: the hinge keeps its rates, an impulse
                            * through the chain stops the tip (stop_at_contact) */
-      const size_t q = i * ranked + lane_rank[lane];
-      const bool hit = colliders_ != nullptr &&
-                       (projected_any[lane] ? contacts.read(lane, contact) : scratch.hit[q]);
-      if (hit && !projected_any[lane]) {
-        contact = Contact{ scratch.depth[q], scratch.normal[q], scratch.surface[q] };
-      }
-      if (hit && project_segment(substep, get(node, lane), lane_tip, d[lane], get(chart, lane),
-                                 angles_[p], stopped_rates, &normal, &contact))
+      if (colliders_ != nullptr && contacts.read(lane, contact) &&
+          project_segment(substep, get(node, lane), lane_tip, d[lane], get(chart, lane),
+                          angles_[p], stopped_rates, &normal, &contact))
       {
-        projected_any[lane] = true;
         scratch.stops[lane].emplace_back(i, normal);
         deflection = Deflection(angles_[p]);
         const mat3 projected = deflection.rotate(get(chart, lane));
