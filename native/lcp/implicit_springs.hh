@@ -110,7 +110,7 @@ class ImplicitSprings {
    * rows gather them by pair): the block Δt C_ij + Δt² K_ij = along x̂x̂ᵀ + across I, the
    * elastic force α_ij k_ij (‖x_ij‖ − l_ij), α_ij k_ij, and max(0, 1 − l/r) of K's lateral
    * term. */
-  struct PairTerms {
+  struct alignas(32) PairTerms {
     vec3 axis;
     float along, across, stretch_force, alpha_k, lateral;
   };
