@@ -111,26 +111,17 @@ void bind_lod(py::module_ &m)
           },
           py::arg("head_to_world"),
           "The rest shape carried by the head, at rest, at the coarsest level.")
-      .def(
-          "set_colliders",
-          [](LodSolver &self, const ColliderSet *colliders, const CollisionParams &params) {
-            self.set_colliders(colliders, params);
-          },
-          py::arg("colliders"), py::arg("params") = CollisionParams(), py::keep_alive<1, 2>(),
-          "Collide every skeleton with a ColliderSet (kept alive by the solver), let it hide "
-          "hair from the camera and keep the placed strands out of it; None for none of them.")
-      .def(
-          "set_bodies",
-          [](LodSolver &self, const ColliderSet *bodies) { self.set_bodies(bodies); },
-          py::arg("bodies"), py::keep_alive<1, 2>(),
-          "Keep the placed strands out of a ColliderSet (kept alive by the solver), as deep as "
-          "at rest at most, when the skeletons collide by a pass instead; None for none.")
-      .def(
-          "set_occluders",
-          [](LodSolver &self, const ColliderSet *occluders) { self.set_occluders(occluders); },
-          py::arg("occluders"), py::keep_alive<1, 2>(),
-          "Let a ColliderSet (kept alive by the solver) hide hair from the camera without the "
-          "skeletons colliding with it by the maps; None for none.")
+      .def("set_colliders", &LodSolver::set_colliders, py::arg("colliders"),
+           py::arg("params") = CollisionParams(), py::keep_alive<1, 2>(),
+           "Collide every skeleton with a ColliderSet (kept alive by the solver), let it hide "
+           "hair from the camera and keep the placed strands out of it; None for none of them.")
+      .def("set_bodies", &LodSolver::set_bodies, py::arg("bodies"), py::keep_alive<1, 2>(),
+           "Keep the placed strands out of a ColliderSet (kept alive by the solver), as deep as "
+           "at rest at most, when the skeletons collide by a pass instead; None for none.")
+      .def("set_occluders", &LodSolver::set_occluders, py::arg("occluders"),
+           py::keep_alive<1, 2>(),
+           "Let a ColliderSet (kept alive by the solver) hide hair from the camera without the "
+           "skeletons colliding with it by the maps; None for none.")
       .def(
           "add_pass",
           [](LodSolver &self, SubstepPass *pass, const float strand_radius) {
