@@ -155,6 +155,40 @@ TEST(Metrics, StretchCountsShrinkingAsMuchAsStretching)
                                               rest.positions)));
 }
 
+TEST(Metrics, PointBoundsAreTheMinimumAndMaximumOfEachCoordinate)
+{
+  vec3 low, high;
+  point_bounds({}, low, high); /* no points: an empty box */
+  EXPECT_TRUE(glm::all(glm::equal(low, vec3(INFINITY))));
+  EXPECT_TRUE(glm::all(glm::equal(high, vec3(-INFINITY))));
+  /* Counts around the 16-point blocks, the extremes placed in every lane and in the tail. */
+  RandomNumberGenerator rng(7);
+  for (const int count : {1, 15, 16, 17, 47, 700}) {
+    std::vector<vec3> points(static_cast<size_t>(count));
+    for (vec3 &p : points) {
+      p = vec3(rng.next_float(-1.0f, 1.0f), rng.next_float(-2.0f, 2.0f), rng.next_float(3.0f, 4.0f));
+    }
+    for (const int at : {0, count / 2, count - 1}) {
+      std::vector<vec3> with = points;
+      with[size_t(at)] = vec3(-5.0f, 9.0f, NAN); /* NaN is passed over */
+      vec3 expected_low(INFINITY), expected_high(-INFINITY);
+      for (const vec3 &p : with) {
+        for (int a = 0; a < 3; a++) {
+          if (!std::isnan(p[a])) {
+            expected_low[a] = std::min(expected_low[a], p[a]);
+            expected_high[a] = std::max(expected_high[a], p[a]);
+          }
+        }
+      }
+      point_bounds(with, low, high);
+      EXPECT_EQ(low, expected_low) << count << " points, extreme at " << at;
+      EXPECT_EQ(high, expected_high) << count << " points, extreme at " << at;
+      EXPECT_EQ(low.x, -5.0f);
+      EXPECT_EQ(high.y, 9.0f);
+    }
+  }
+}
+
 TEST(Groom, StrandsErrorChecksTheOffsetsAlone)
 {
   TwoStrands g;

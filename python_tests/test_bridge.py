@@ -364,7 +364,7 @@ def test_head_without_vertices_is_a_clear_error(empty_scene):
 def test_points_output_positions_and_texture_space_are_blenders(empty_scene, count):
     """write_points puts the positions in bit for bit, whichever way the Blender stores them,
     and leaves the texture space Blender's automatic one would be (on meshes whose positions
-    are vertices, hairdyn finds it in numpy; Blender's own search is slower there)."""
+    are vertices, hairdyn finds it natively; Blender's own search is slower there)."""
     rng = np.random.default_rng(count)
     positions = (rng.normal(size=(count, 3)) * [1.0, 1e-7, 0.0]).astype(np.float32)
     positions[:, 2] = 2.5  # a flat axis: Blender makes its size 1; the second one is tiny

@@ -104,6 +104,24 @@ void bind_groom(py::module_ &m)
       "previous_positions = positions. Returns (count_nonfinite, max_relative_stretch).");
 
   m.def(
+      "point_bounds",
+      [](const py::handle positions) {
+        const Span<vec3> points = as_float3_unchecked(positions, "positions");
+        py::array_t<float> result({2, 3});
+        vec3 low, high;
+        {
+          py::gil_scoped_release release;
+          point_bounds(points, low, high);
+        }
+        std::copy_n(glm::value_ptr(low), 3, result.mutable_data(0, 0));
+        std::copy_n(glm::value_ptr(high), 3, result.mutable_data(1, 0));
+        return result;
+      },
+      py::arg("positions"),
+      "(2, 3) float32: the lowest and highest coordinates of (N, 3) float32 positions, NaN "
+      "ignored (inf and -inf for none).");
+
+  m.def(
       "split_columns",
       [](const py::handle table, const py::sequence outputs) {
         /* The table's width from its own shape, so that anything but a 2-D array fails in

@@ -91,6 +91,35 @@ int64_t count_nonfinite(const Span<vec3> positions)
   return count;
 }
 
+void point_bounds(const Span<vec3> positions, vec3 &r_low, vec3 &r_high)
+{
+  /* Over the coordinates as one flat array, 16 points (48 floats) at a time: lane k holds
+   * coordinate k % 3, so the loop vectorises (a vec3 at a time does not). */
+  constexpr int64_t width = 48;
+  float low[width], high[width];
+  std::fill_n(low, width, INFINITY);
+  std::fill_n(high, width, -INFINITY);
+  const float *values = reinterpret_cast<const float *>(positions.data()); /* packed xyz */
+  const int64_t size = 3 * positions.size(), wide = size / width * width;
+  for (int64_t i = 0; i < wide; i += width) {
+    for (int64_t k = 0; k < width; k++) {
+      const float value = values[i + k];
+      low[k] = std::min(low[k], value);
+      high[k] = std::max(high[k], value);
+    }
+  }
+  for (int64_t i = wide; i < size; i++) {
+    low[i % 3] = std::min(low[i % 3], values[i]);
+    high[i % 3] = std::max(high[i % 3], values[i]);
+  }
+  r_low = vec3(INFINITY);
+  r_high = vec3(-INFINITY);
+  for (int k = 0; k < int(width); k++) {
+    r_low[k % 3] = std::min(r_low[k % 3], low[k]);
+    r_high[k % 3] = std::max(r_high[k % 3], high[k]);
+  }
+}
+
 StrandFrame strand_frame(const Span<int32_t> curve_offsets, const Span<vec3> rest_positions,
                          const Span<vec3> positions, const float dt,
                          const MutableSpan<vec3> r_previous, const MutableSpan<vec3> r_velocities,

@@ -17,6 +17,10 @@ void point_tangents(Span<int32_t> curve_offsets, Span<vec3> positions,
 /* Number of points with a NaN or infinite coordinate. */
 int64_t count_nonfinite(Span<vec3> positions);
 
+/* The points' axis-aligned bounding box, corner by corner (+inf and -inf for no points); NaN
+ * coordinates are ignored. */
+void point_bounds(Span<vec3> positions, vec3 &r_low, vec3 &r_high);
+
 /* What a frame's strand positions give the reports and the outputs, in one pass over them on
  * the thread pool (issue 18: one native pass per frame instead of one per figure). */
 struct StrandFrame {
