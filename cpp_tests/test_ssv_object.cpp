@@ -198,6 +198,8 @@ TEST(SsvObject, SegmentPenetrationShareCountsSegmentsThatCutABody)
   const std::vector<vec3> x{vec3(-0.03f, 0, 0.01f), vec3(-0.01f, 0, 0.004f), vec3(0.01f, 0, -0.004f),
                             vec3(-0.03f, 0.01f, 0.01f), vec3(-0.01f, 0.01f, 0.01f), vec3(0.01f, 0.01f, 0.01f)};
   EXPECT_FLOAT_EQ(segment_penetration_share(offsets, x, colliders, 2e-4f), 0.25f);
+  /* A zero tolerance counts any depth (max_segment_samples along the segment). */
+  EXPECT_FLOAT_EQ(segment_penetration_share(offsets, x, colliders, 0.0f), 0.25f);
   /* A tolerance deeper than half the blade counts nothing. */
   EXPECT_FLOAT_EQ(segment_penetration_share(offsets, x, colliders, 0.0011f), 0.0f);
 }

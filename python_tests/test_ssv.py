@@ -104,8 +104,11 @@ def test_segment_penetration_share_sees_a_segment_through_a_thin_blade(n):
     assert n.segment_penetration_share(offsets, positions, colliders, 2e-4) == pytest.approx(0.5)
     stats = colliders.penetration_stats(positions, 2e-4)
     assert stats["penetration_share"] == 0.0  # the node measure sees nothing
-    with pytest.raises(ValueError, match="tolerance"):
-        n.segment_penetration_share(offsets, positions, colliders, 0.0)
+    # 0: any depth (the add-on's report tolerance may be 0); a negative one is refused.
+    assert n.segment_penetration_share(offsets, positions, colliders, 0.0) == pytest.approx(0.5)
+    for bad in (-1e-4, float("nan")):
+        with pytest.raises(ValueError, match="tolerance"):
+            n.segment_penetration_share(offsets, positions, colliders, bad)
 
 
 def test_passes_carry_their_parameters_and_statistics(n):

@@ -83,15 +83,15 @@ void bind_ssv(py::module_ &m)
         const Span<int32_t> offsets = as_int(curve_offsets, "curve_offsets");
         const Span<vec3> points = as_float3(positions, "positions");
         check_groom(offsets, points);
-        if (!std::isfinite(tolerance) || tolerance <= 0.0) {
-          fail("tolerance must be a positive distance, not " + std::to_string(tolerance));
+        if (!std::isfinite(tolerance) || tolerance < 0.0) {
+          fail("tolerance must be a distance of 0 or more, not " + std::to_string(tolerance));
         }
         py::gil_scoped_release release;
         return segment_penetration_share(offsets, points, colliders, float(tolerance));
       },
       py::arg("curve_offsets"), py::arg("positions"), py::arg("colliders"), py::arg("tolerance"),
-      "Share (0..1) of segments with a point deeper than tolerance (scene units) inside any "
-      "collider of the set, by the exact mesh distance.");
+      "Share (0..1) of segments with a point deeper than tolerance (scene units, 0: any depth) "
+      "inside any collider of the set, by the exact mesh distance.");
 
   /* SubstepPass is bound by strands_bindings (bind_strands runs first): StrandSolver.add_pass
    * takes these. */

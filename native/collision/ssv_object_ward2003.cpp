@@ -528,7 +528,10 @@ float segment_penetration_share(const Span<int32_t> curve_offsets, const Span<ve
           const float tolerance = tolerance_wo / uniform_scale(collider.object_to_world());
           const vec3 a = transform_point(collider.world_to_object(), positions_wo[k]);
           const vec3 b = transform_point(collider.world_to_object(), positions_wo[k + 1]);
-          const int samples = 1 + int(std::ceil(glm::length(b - a) / (0.25f * tolerance)));
+          /* At most a quarter of the tolerance apart, and at most max_segment_samples. */
+          const float length = glm::length(b - a);
+          const float spacing = std::max(0.25f * tolerance, length / float(max_segment_samples));
+          const int samples = spacing > 0.0f ? 1 + int(std::ceil(length / spacing)) : 1;
           for (int j = 0; j <= samples && !cuts; j++) {
             cuts = collider.exact().depth(glm::mix(a, b, float(j) / float(samples))) > tolerance;
           }

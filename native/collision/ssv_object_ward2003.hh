@@ -124,9 +124,12 @@ class SsvObjectPass : public SubstepPass {
   HairObjectStats stats_;
 };
 
-/* Share (0..1) of segments with a point deeper than tolerance_wo inside any collider (exact
- * signed distance, samples along the segment at most tolerance_wo / 4 apart: the distance is
- * 1-Lipschitz, so a deeper point is missed by at most a quarter of the tolerance). */
+/* Samples of a segment at most, in segment_penetration_share. */
+constexpr int max_segment_samples = 64;
+/* Share (0..1) of segments with a point deeper than tolerance_wo (≥ 0; 0: any depth) inside
+ * any collider (exact signed distance, samples along the segment at most tolerance_wo / 4
+ * apart and at most max_segment_samples: the distance is 1-Lipschitz, so a deeper point is
+ * missed by at most the larger of a quarter of the tolerance and the segment's length / 128). */
 float segment_penetration_share(Span<int32_t> curve_offsets, Span<vec3> positions_wo,
                                 const ColliderSet &colliders, float tolerance_wo);
 
