@@ -216,3 +216,19 @@ def test_a_run_switches_the_particle_hair_off_while_it_steps(open_fixture, monke
     with pytest.raises(HairdynError):
         bake.start_bake(bpy.context, body)
     assert modifier.show_viewport
+
+
+@pytest.mark.parametrize("integrator", ['IMPLICIT', 'EXPLICIT'])
+def test_a_diverged_run_says_what_to_change(open_fixture, integrator):
+    """The wind at the panel's top speed, 4 substeps: the drag (explicit) outruns the thin
+    hair's steps. The run stops with a sentence whose advice fits the settings: the implicit
+    integrator is suggested only where it is not already in use."""
+    hair = strands_on(open_fixture, "head_shake.blend")
+    hair.hairdyn.strands.integrator = integrator
+    wind = hair.hairdyn.wind
+    wind.speed = wind.bl_rna.properties["speed"].hard_max
+    with pytest.raises(HairdynError, match="diverged") as failure:
+        simulation.run(bpy.context, hair, 1, 12)
+    message = str(failure.value)
+    assert "wind and air drag" in message
+    assert ("implicit integrator" in message) == (integrator == 'EXPLICIT')

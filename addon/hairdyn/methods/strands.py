@@ -16,6 +16,8 @@ import numpy as np
 from ..errors import HairdynError
 from .base import Method, Section, Stream, nearest
 
+EXPLICIT = 0  # StrandParams.integrator's choices: explicit, implicit
+
 
 class Extension:
     """Something the strand solver runs each substep (native SubstepPass): params {settings
@@ -150,6 +152,7 @@ class Strands(Method):
         head_mesh = bridge.read_mesh(build.head, build.depsgraph)
         normals = root_normals(groom, head_mesh)
         self.solver = self._make_solver(build, params, normals)
+        self.explicit = params.integrator == EXPLICIT
         self.children = self._make_children(build, params, head_mesh)
         if build.colliders is not None:
             self.solver.set_colliders(build.colliders.set, build.colliders.params)
@@ -212,8 +215,11 @@ class Strands(Method):
         self.solver.step(frame_dt, head_matrix)
         if self.solver.diverged_num:
             raise HairdynError(
-                f"{self.solver.diverged_num} strands diverged (their motion stopped being "
-                "finite): use the implicit integrator, more substeps or softer hinges"
+                f"{self.solver.diverged_num} strands diverged (a point passed 1,000 m/s or "
+                "stopped being finite): "
+                + ("use the implicit integrator, " if self.explicit else "")
+                + "more substeps, softer hinges, or less wind and air drag (drag is stiff on "
+                "thin, light hair: its step is explicit)"
             )
         for item in self.attached:
             item.after_step(self.solver, head_matrix)
