@@ -135,6 +135,42 @@ TEST(LcpScalp, PoissonDiscSamplesKeepTheirDistanceAndAreDeterministic)
   EXPECT_EQ(sample_scalp_particles(scalp, LengthMap{}, params, vec3(0, 0, -1)).size(), 300);
 }
 
+TEST(LcpScalp, TheSamplingPlanForeseesTheCountAndRefusesWhatCannotBeHeld)
+{
+  LcpParams params = params_for_spacing(0.01f);
+  params.max_length = 0.06f;
+  const Patch patch = cap_patch(5, 20, 0.1f, 0.8f);
+  const ScalpMap scalp(patch.vertices, patch.triangles, {});
+  /* The volume: the cap's area (2π R² (1 − cos 0.8)) times s_r + L_max, within a few percent
+   * (Monte Carlo, and the cap's flat triangles); the count about what the spacing places. */
+  const ScalpSampling plan = plan_scalp_sampling(scalp, LengthMap{}, params);
+  const double cap_area = 2.0 * glm::pi<double>() * 0.01 * (1.0 - std::cos(0.8));
+  EXPECT_NEAR(plan.volume / (cap_area * double(params.root_depth + params.max_length)), 1.0,
+              0.05);
+  const int64_t placed = sample_scalp_particles(scalp, LengthMap{}, params, vec3(0, 0, -1)).size();
+  EXPECT_NEAR(double(plan.count) / double(placed), 1.0, 0.25) << plan.count << " " << placed;
+  EXPECT_EQ(find_sampling_size_error(plan, params), "");
+  /* Too many particles, by count or by spacing: the sentence names the setting to change. */
+  LcpParams many = params;
+  many.particle_num = int32_t(max_lcp_particles + 1);
+  EXPECT_NE(find_sampling_size_error(plan_scalp_sampling(scalp, LengthMap{}, many), many)
+                .find("lower the count"),
+            std::string::npos);
+  LcpParams fine = params_for_spacing(1e-4f);
+  fine.max_length = 0.06f;
+  EXPECT_NE(find_sampling_size_error(plan_scalp_sampling(scalp, LengthMap{}, fine), fine)
+                .find("raise the spacing"),
+            std::string::npos);
+  /* A count it may hold, but h₂ reaching across the whole cap: every particle a neighbour of
+   * every other. */
+  LcpParams wide = params;
+  wide.particle_num = int32_t(max_lcp_particles);
+  wide.h2 = 1.0f;
+  EXPECT_NE(find_sampling_size_error(plan_scalp_sampling(scalp, LengthMap{}, wide), wide)
+                .find("lower h₁ and h₂"),
+            std::string::npos);
+}
+
 TEST(LcpScalp, CantileverBeamBendsTowardGravity)
 {
   vec3 x, t;

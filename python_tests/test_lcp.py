@@ -87,6 +87,29 @@ def test_lcp_bad_values_are_refused(open_fixture):
         simulation.run(bpy.context, hair, 1, 2)
 
 
+@pytest.mark.parametrize("setting, names", [
+    ("particle_spacing", "raise the spacing"),  # the panel's smallest: billions of particles
+    ("particle_num", "lower h₁ and h₂"),  # the panel's largest, with the default h₁ and h₂
+])
+def test_lcp_sizes_beyond_what_memory_holds_are_refused_before_sampling(
+        open_fixture, setting, names):
+    """The panel's extreme particle spacing and count ask for more particles, or neighbours
+    within 2h, than a simulation can hold: refused at once with the setting to change (the
+    sampling alone would take hours)."""
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    settings = hair.hairdyn
+    settings.method = 'LCP'
+    prop = settings.lcp.bl_rna.properties[setting]
+    if setting == "particle_spacing":
+        settings.lcp.particle_num = 0
+        settings.lcp.particle_spacing = prop.hard_min
+    else:
+        settings.lcp.particle_num = prop.hard_max
+    with pytest.raises(HairdynError, match=f"Too many particles: .*{names}"):
+        simulation.run(bpy.context, hair, 1, 2)
+
+
 def test_lcp_bakes_and_plays_back_its_particles(open_fixture, tmp_path):
     hair = lcp_hair(open_fixture, "head_curves.blend")
     hair.hairdyn.cache_directory = str(tmp_path)

@@ -151,11 +151,20 @@ void bind_lcp(py::module_ &m)
           error = scalp.is_valid() ? find_length_map_error(scalp, length) :
                                      "the scalp's harmonic map could not be solved";
           if (error.empty()) {
+            error = find_sampling_size_error(plan_scalp_sampling(scalp, length, params), params);
+            if (!error.empty()) {
+              error = "Too many particles: " + error + ".";
+            }
+          }
+          else {
+            error = "Invalid length map or scalp: " + error + ".";
+          }
+          if (error.empty()) {
             particles = sample_scalp_particles(scalp, length, params, vec3(0.0f, 0.0f, -1.0f));
           }
         }
         if (!error.empty()) {
-          fail("Invalid length map or scalp: " + error + ".");
+          fail(error);
         }
         if (particles.size() == 0 ||
             std::none_of(particles.s.begin(), particles.s.end(), [](float s) { return s < 0.0f; }))

@@ -78,7 +78,7 @@ struct LcpParams {
                  "Poisson-disc radius of the particles in the (u, v, s) distance of eq. 3"}
            .labeled("Particle Spacing"));
     fn(&LcpParams::particle_num,
-       ParamInfo{"particle_num", "N", "", 0, 10000000,
+       ParamInfo{"particle_num", "N", "", 0, 2000000,
                  "Target particle count (0: as many as the spacing allows)"}
            .labeled("Particle Count"));
     fn(&LcpParams::root_depth,

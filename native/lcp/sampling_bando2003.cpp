@@ -162,60 +162,131 @@ float radius_for_count(const double volume, const int64_t count)
   return float(std::cbrt(0.573 * volume / double(std::max<int64_t>(count, 1))));
 }
 
-}  // namespace
-
-LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &length,
-                                    const LcpParams &params, const vec3 &gravity_dir)
-{
-  assert(find_length_map_error(scalp, length).empty());
-  const Span<float> areas = scalp.triangle_areas();
-  std::vector<double> cumulative(size_t(areas.size()) + 1, 0.0);
-  for (int64_t t = 0; t < areas.size(); t++) {
-    cumulative[size_t(t) + 1] = cumulative[size_t(t)] + double(areas[t]);
-  }
-  const float s_r = params.root_depth;
-  const float l_max = params.max_length;
-
-  std::mt19937_64 rng(uint64_t(params.seed));
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  /* One candidate uniformly distributed in the (u, v, s) volume, measured with eq. 3:
-   * area-uniform on the scalp, s uniform in [−s_r, L_max], rejected above L(u, v). */
+/* Candidates uniformly distributed in the (u, v, s) volume, measured with eq. 3: area-uniform
+ * on the scalp, s uniform in [−s_r, L_max], rejected above L(u, v). The first volume_probes
+ * of them estimate the volume V = ∫ (L + s_r) dA by Monte Carlo (the plan); the sampler then
+ * draws on from the same stream. */
+class ScalpDarts {
+ public:
   struct Candidate {
     ScalpPoint point;
     vec2 uv;
     float s, length;
   };
-  const auto draw = [&](Candidate &r_c) {
-    const double a = unit(rng) * cumulative.back();
+
+  ScalpDarts(const ScalpMap &scalp, const LengthMap &length, const LcpParams &params)
+      : scalp_(scalp), length_(length), s_r_(params.root_depth), l_max_(params.max_length),
+        rng_(uint64_t(params.seed))
+  {
+    assert(find_length_map_error(scalp, length).empty());
+    const Span<float> areas = scalp.triangle_areas();
+    cumulative_.assign(size_t(areas.size()) + 1, 0.0);
+    for (int64_t t = 0; t < areas.size(); t++) {
+      cumulative_[size_t(t) + 1] = cumulative_[size_t(t)] + double(areas[t]);
+    }
+    int64_t inside_num = 0;
+    const int64_t volume_probes = 20000;
+    Candidate c;
+    for (int64_t k = 0; k < volume_probes; k++) {
+      inside_num += draw(c) ? 1 : 0;
+    }
+    volume_ = cumulative_.back() * double(s_r_ + l_max_) * double(inside_num) /
+              double(volume_probes);
+  }
+
+  /* One candidate; false when it lies above the length map. */
+  bool draw(Candidate &r_c)
+  {
+    const double a = unit_(rng_) * cumulative_.back();
     const int64_t t = std::clamp<int64_t>(
-        int64_t(std::upper_bound(cumulative.begin(), cumulative.end(), a) - cumulative.begin()) - 1,
-        0, areas.size() - 1);
-    double b1 = unit(rng), b2 = unit(rng);
+        int64_t(std::upper_bound(cumulative_.begin(), cumulative_.end(), a) -
+                cumulative_.begin()) - 1,
+        0, int64_t(cumulative_.size()) - 2);
+    double b1 = unit_(rng_), b2 = unit_(rng_);
     if (b1 + b2 > 1.0) {
       b1 = 1.0 - b1;
       b2 = 1.0 - b2;
     }
-    r_c.point = scalp.point_in_triangle(t, vec3(float(1.0 - b1 - b2), float(b1), float(b2)), r_c.uv);
-    r_c.s = float(-double(s_r) + unit(rng) * double(s_r + l_max));
-    r_c.length = l_max * length.sample(r_c.point, r_c.uv);
+    r_c.point = scalp_.point_in_triangle(t, vec3(float(1.0 - b1 - b2), float(b1), float(b2)),
+                                         r_c.uv);
+    r_c.s = float(-double(s_r_) + unit_(rng_) * double(s_r_ + l_max_));
+    r_c.length = l_max_ * length_.sample(r_c.point, r_c.uv);
     return r_c.s <= r_c.length;
-  };
-
-  /* The sampled volume V = ∫ (L + s_r) dA, by Monte Carlo over the same candidates. */
-  int64_t inside_num = 0;
-  const int64_t volume_probes = 20000;
-  Candidate c;
-  for (int64_t k = 0; k < volume_probes; k++) {
-    inside_num += draw(c) ? 1 : 0;
   }
-  const double volume = cumulative.back() * double(s_r + l_max) * double(inside_num) /
-                        double(volume_probes);
 
-  float radius = params.particle_num > 0 ? radius_for_count(volume, params.particle_num) :
-                                           params.particle_spacing;
-  const int64_t expected_num = params.particle_num > 0 ?
-                                   int64_t(params.particle_num) :
-                                   int64_t(volume / (1.745 * double(radius) * radius * radius)) + 1;
+  double volume() const { return volume_; }
+
+ private:
+  const ScalpMap &scalp_;
+  const LengthMap &length_;
+  float s_r_, l_max_;
+  std::vector<double> cumulative_;
+  std::mt19937_64 rng_;
+  std::uniform_real_distribution<double> unit_{0.0, 1.0};
+  double volume_ = 0.0;
+};
+
+/* x as a count, at most 2⁶² (a request far beyond any limit stays beyond it, defined). */
+int64_t saturated(const double x)
+{
+  return x < 4.6e18 ? int64_t(x) : int64_t(4.6e18);
+}
+
+ScalpSampling plan_from(const double volume, const LcpParams &params)
+{
+  ScalpSampling plan;
+  plan.volume = volume;
+  plan.radius = params.particle_num > 0 ? radius_for_count(volume, params.particle_num) :
+                                          params.particle_spacing;
+  plan.count = params.particle_num > 0 ?
+                   int64_t(params.particle_num) :
+                   saturated(volume / (1.745 * double(plan.radius) * plan.radius * plan.radius)) +
+                       1;
+  return plan;
+}
+
+}  // namespace
+
+ScalpSampling plan_scalp_sampling(const ScalpMap &scalp, const LengthMap &length,
+                                  const LcpParams &params)
+{
+  return plan_from(ScalpDarts(scalp, length, params).volume(), params);
+}
+
+std::string find_sampling_size_error(const ScalpSampling &plan, const LcpParams &params)
+{
+  if (plan.count > max_lcp_particles) {
+    return "the particle " + std::string(params.particle_num > 0 ? "count" : "spacing") +
+           " asks for about " + std::to_string(plan.count) + " particles, more than the " +
+           std::to_string(max_lcp_particles) + " an LCP simulation may hold: " +
+           (params.particle_num > 0 ? "lower the count" : "raise the spacing");
+  }
+  /* Neighbours of a particle within 2h (h the larger of h₁ and h₂) at the plan's density. */
+  const double reach = 2.0 * double(std::max(params.h1, params.h2));
+  const double neighbors = double(plan.count) / std::max(plan.volume, 1e-30) * 4.0 / 3.0 *
+                           glm::pi<double>() * reach * reach * reach;
+  if (double(plan.count) * neighbors > double(max_lcp_neighbor_entries)) {
+    const int64_t entries = saturated(double(plan.count) * neighbors);
+    return "with h₁ = " + std::to_string(params.h1) + " m and h₂ = " +
+           std::to_string(params.h2) + " m each of about " + std::to_string(plan.count) +
+           " particles would have about " + std::to_string(saturated(neighbors)) +
+           " neighbours within 2 max(h₁, h₂), " + std::to_string(entries) +
+           " in all, more than the " + std::to_string(max_lcp_neighbor_entries) +
+           " the lists may hold: lower h₁ and h₂ with the particle spacing (Bando 2003 has "
+           "each particle reach a few tens)";
+  }
+  return {};
+}
+
+LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &length,
+                                    const LcpParams &params, const vec3 &gravity_dir)
+{
+  ScalpDarts darts(scalp, length, params);
+  using Candidate = ScalpDarts::Candidate;
+  const ScalpSampling plan = plan_from(darts.volume(), params);
+  float radius = plan.radius;
+  const int64_t expected_num = plan.count;
+  Candidate c;
   std::vector<Candidate> accepted;
   PoissonDiscSet disc(radius);
   int64_t failures = 0;
@@ -234,7 +305,7 @@ LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &leng
       disc = std::move(smaller);
       failures = 0;
     }
-    if (!draw(c) || !disc.try_insert(c.point.position, c.s)) {
+    if (!darts.draw(c) || !disc.try_insert(c.point.position, c.s)) {
       failures++;
       continue;
     }

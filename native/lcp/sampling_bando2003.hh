@@ -49,6 +49,29 @@ void cantilever_beam(const vec3 &root, const vec3 &root_dir, const vec3 &gravity
                      float length, float s, float bending_length, vec3 &r_position,
                      vec3 &r_direction);
 
+/* What sample_scalp_particles will place, known before it throws a dart: the (u, v, s)
+ * volume V (m³, Monte Carlo), the Poisson-disc radius and about how many particles. */
+struct ScalpSampling {
+  double volume = 0.0;
+  float radius = 0.0f;
+  int64_t count = 0;
+};
+ScalpSampling plan_scalp_sampling(const ScalpMap &scalp, const LengthMap &length,
+                                  const LcpParams &params);
+
+/* The most particles an LCP simulation holds, and the most neighbour entries (particles times
+ * the neighbours each has within 2 max(h₁, h₂)) its lists may hold: 8 GB for the lists'
+ * indices alone. (300,000 particles on the fixtures' head with the default h₁ and h₂ have
+ * about 3,400 each, 1e9 in all: they take minutes to set up, and run.) */
+constexpr int64_t max_lcp_particles = 2000000;
+constexpr int64_t max_lcp_neighbor_entries = 2000000000;
+
+/* A sentence why a plan is too large to simulate, or empty: more than max_lcp_particles, or
+ * h₁ and h₂ so large against the spacing that the neighbour lists would outgrow
+ * max_lcp_neighbor_entries (the plan's density times the volume of a ball of radius
+ * 2 max(h₁, h₂)). Refused before sampling, which would take hours there. */
+std::string find_sampling_size_error(const ScalpSampling &plan, const LcpParams &params);
+
 /* Poisson-disc sampling of the scalp volume (§3.2) in the scalp's space; gravity_dir is the
  * unit gravity direction in that space (world −Z for a world-space scalp). */
 LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &length,
