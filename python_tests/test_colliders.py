@@ -2,8 +2,10 @@
 transform, deforming meshes rebuilt every frame."""
 import bpy
 import numpy as np
+import pytest
 
-from hairdyn import colliders
+from hairdyn import colliders, simulation
+from hairdyn.errors import HairdynError
 
 
 def depsgraph():
@@ -66,3 +68,33 @@ def test_deforming_collider_is_rebuilt_each_frame(open_fixture):
     rebuild_ms = built.update(depsgraph())
     assert rebuild_ms > 0
     assert built.set.find_contacts(point)["hit"][0]
+
+
+@pytest.mark.parametrize("method", ['STRANDS', 'LCP', 'FOLLOW'])
+def test_a_collider_scaled_to_nothing_mid_run_stops_it_with_its_name_and_frame(
+        open_fixture, method):
+    """The body's scale keyed to 0 at frame 3: the run stops there with a sentence naming the
+    collider and the frame (the native module's refusal of a transform with no inverse), not
+    a bare ValueError; the frames before were written."""
+    open_fixture("head_shake.blend")
+    hair, body = bpy.data.objects["Hair"], bpy.data.objects["Body"]
+    hair.hairdyn.method = method
+    if method == 'LCP':
+        hair.hairdyn.lcp.particle_num = 500
+    body.keyframe_insert("scale", frame=1)
+    body.scale = (0.0, 0.0, 0.0)
+    body.keyframe_insert("scale", frame=3)
+    with pytest.raises(HairdynError, match="Collider 'Body' at frame 3: .*singular"):
+        simulation.run(bpy.context, hair, 1, 4)
+
+
+def test_a_frame_rate_slower_than_ten_seconds_a_frame_is_refused(open_fixture):
+    """Blender lets a frame last 1,000 s (1 frame a second over a base of 1,000); the solvers
+    step at most 10 s a frame, and the run says so before it starts."""
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    hair.hairdyn.method = 'STRANDS'
+    render = bpy.context.scene.render
+    render.fps, render.fps_base = 1, 1000.0
+    with pytest.raises(HairdynError, match="makes a frame 1000 s long"):
+        simulation.run(bpy.context, hair, 1, 2)

@@ -108,21 +108,30 @@ class Colliders:
         for those whose evaluated shape changed. Returns the ms spent rebuilding."""
         rebuild_ms = 0.0
         for index, (obj, collider) in enumerate(zip(self.objects, self.colliders)):
-            if not self.deforming[index]:
-                collider.set_transform(bridge.object_matrix(obj, depsgraph))
-                continue
-            mesh = bridge.read_mesh(obj, depsgraph)
-            if len(mesh.vertices) != len(self.vertices[index]):
+            try:
+                rebuild_ms += self._update(index, obj, collider, depsgraph)
+            except ValueError as error:  # the native module's sentence: a transform or shape
                 raise HairdynError(
-                    f"Collider '{obj.name}' changed its vertex count during the "
-                    "simulation; hairdyn follows deforming colliders of fixed "
-                    "topology"
-                )
-            if not np.array_equal(mesh.vertices, self.vertices[index]):
-                collider.rebuild(mesh.vertices)
-                rebuild_ms += collider.build_ms
-                self.vertices[index] = mesh.vertices
-            collider.set_transform(mesh.matrix_world)
+                    f"Collider '{obj.name}' at frame {depsgraph.scene.frame_current}: {error}"
+                ) from None
+        return rebuild_ms
+
+    def _update(self, index, obj, collider, depsgraph):
+        if not self.deforming[index]:
+            collider.set_transform(bridge.object_matrix(obj, depsgraph))
+            return 0.0
+        mesh = bridge.read_mesh(obj, depsgraph)
+        if len(mesh.vertices) != len(self.vertices[index]):
+            raise HairdynError(
+                f"Collider '{obj.name}' changed its vertex count during the simulation; "
+                "hairdyn follows deforming colliders of fixed topology"
+            )
+        rebuild_ms = 0.0
+        if not np.array_equal(mesh.vertices, self.vertices[index]):
+            collider.rebuild(mesh.vertices)
+            rebuild_ms = collider.build_ms
+            self.vertices[index] = mesh.vertices
+        collider.set_transform(mesh.matrix_world)
         return rebuild_ms
 
     def penetration(self, positions_wo, curve_offsets=None):

@@ -56,9 +56,20 @@ def head_object(hair_obj, groom=None):
     return head
 
 
+MAX_FRAME_DT = 10.0  # s: the solvers step at most this much a frame
+
+
 def frame_dt(scene):
-    """Seconds per frame of the scene."""
-    return scene.render.fps_base / scene.render.fps
+    """Seconds per frame of the scene; HairdynError beyond MAX_FRAME_DT (Blender allows
+    1,000 s: 1 frame a second over a base of 1,000)."""
+    dt = scene.render.fps_base / scene.render.fps
+    if not 0.0 < dt <= MAX_FRAME_DT:
+        raise HairdynError(
+            f"The scene's frame rate ({scene.render.fps} / {scene.render.fps_base:g} frames a "
+            f"second) makes a frame {dt:g} s long; hairdyn steps at most {MAX_FRAME_DT:g} s a "
+            "frame: raise the frame rate (Output Properties > Format)"
+        )
+    return dt
 
 
 class Simulation:
@@ -120,7 +131,10 @@ class Simulation:
             self.collision_ms = (time.perf_counter() - start) * 1000.0
         self.method.read_scene(depsgraph)
         start = time.perf_counter()
-        self.method.step(frame_dt, head_matrix)
+        try:
+            self.method.step(frame_dt, head_matrix)
+        except ValueError as error:  # the native solver refused this frame, in a sentence
+            raise HairdynError(str(error)) from None
         elapsed_ms = (time.perf_counter() - start) * 1000.0
         self._measure(frame_dt)
         return elapsed_ms

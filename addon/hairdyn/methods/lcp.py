@@ -383,10 +383,7 @@ class Lcp(Method):
         )
 
     def step(self, frame_dt, head_matrix):
-        try:
-            self.solver.step(frame_dt, head_matrix)
-        except ValueError as error:  # a refused or diverged frame: the solver's sentence
-            raise HairdynError(str(error)) from None  # names LCP
+        self.solver.step(frame_dt, head_matrix)  # refused or diverged: a sentence naming LCP
         self.strand_positions = self.skin.apply(
             self.solver.positions, head_matrix, self.collider_set
         )
