@@ -53,3 +53,36 @@ def test_report_tolerance_at_its_panel_minimum_counts_any_depth(open_fixture):
     assert report["nan_frames"] == 0
     assert 0.0 <= report["segment_penetration_share"] <= 1.0
     assert report["penetration_tolerance"] == 0.0
+
+
+def test_the_curves_radius_attribute_sizes_the_swept_spheres(open_fixture):
+    """Each strand's swept spheres take its Curves radius attribute (in world meters, the
+    object's scale applied); Strand Thickness stands in where there is none, or where the
+    attribute holds a negative value (with a warning in the report)."""
+    import numpy as np
+
+    def run_with(scale=None, broken=False):
+        open_fixture("head_shake.blend")
+        hair = bpy.data.objects["Hair"]
+        radius = hair.data.attributes["radius"]
+        values = np.empty(len(radius.data), dtype=np.float32)
+        radius.data.foreach_get("value", values)
+        if broken:
+            values[5] = -1.0
+        if scale is None:
+            hair.data.attributes.remove(radius)
+        else:
+            radius.data.foreach_set("value", values * np.float32(scale))
+        cli.apply_settings(hair.hairdyn, ["method=strands", "hair_hair=true",
+                                          "swept_spheres.thickness=0.5",  # mm
+                                          "strands.children_per_guide=0"])
+        return simulation.run(bpy.context, hair, 1, 3)
+
+    none, thin, thick = run_with(None), run_with(0.25), run_with(4.0)
+    # The fixture's radii (0.4-1.2 mm) against the 0.5 mm thickness: the pairs within reach
+    # grow with the radii.
+    assert thin["hair_hair_pairs"] < none["hair_hair_pairs"] < thick["hair_hair_pairs"]
+    assert thin["crossings"] < thick["crossings"]
+    broken = run_with(1.0, broken=True)
+    assert broken["hair_hair_pairs"] == none["hair_hair_pairs"]
+    assert any("radius attribute" in w for w in broken["groom_warnings"])

@@ -31,6 +31,9 @@ class Groom:
     # (N,) bool pinned points (FIXED_ATTRIBUTE; the roots are pinned anyway), or None: only
     # the roots (legacy particle hair, or Curves without the attribute)
     fixed: object = None
+    # (N,) float32 strand radius per point in world meters (a Curves radius attribute), or
+    # None: the swept spheres' thickness setting stands for it
+    radii: object = None
 
     @property
     def pins_num(self):
@@ -168,13 +171,37 @@ def read_curves(obj, depsgraph):
             and len(attribute.data) == len(curve_offsets) - 1):
         root_uvs = np.empty((len(curve_offsets) - 1, 2), dtype=np.float32)
         attribute.data.foreach_get("vector", root_uvs.ravel())
+    matrix_world = matrix_array(evaluated.matrix_world)
+    radii, warnings = read_radii(obj, len(positions), matrix_world)
     return Groom(
-        positions_wo=to_world(matrix_array(evaluated.matrix_world), positions),
+        positions_wo=to_world(matrix_world, positions),
         curve_offsets=curve_offsets,
         surface=obj.data.surface,
         root_uvs=root_uvs,
+        warnings=warnings,
         fixed=read_fixed(obj, len(positions)),
+        radii=radii,
     )
+
+
+def read_radii(obj, points_num, matrix_world):
+    """((N,) float32 radii in world meters, [warning]) from the FLOAT point attribute
+    "radius" of a Curves object (scaled by the object's mean scale), or (None, []) when it has
+    none, or one for other points than the evaluated ones; (None, [sentence]) when a value is
+    negative or not a number."""
+    attribute = obj.data.attributes.get("radius")
+    if (attribute is None or attribute.domain != 'POINT' or attribute.data_type != 'FLOAT'
+            or len(attribute.data) != points_num):
+        return None, []
+    radii = np.empty(points_num, dtype=np.float32)
+    attribute.data.foreach_get("value", radii)
+    if not (np.isfinite(radii).all() and (radii >= 0.0).all()):
+        message = (f"the radius attribute of '{obj.name}' has values that are negative or not "
+                   "numbers; the swept spheres' Strand Thickness stands for it")
+        print(f"hairdyn: warning: {message}", file=sys.stderr)
+        return None, [message]
+    scale = abs(float(np.linalg.det(matrix_world[:3, :3]))) ** (1.0 / 3.0)
+    return (radii * np.float32(scale)).astype(np.float32), []
 
 
 def read_fixed(obj, points_num):
@@ -301,6 +328,7 @@ def drop_degenerate_strands(groom, name):
         root_uvs=None if groom.root_uvs is None else np.ascontiguousarray(groom.root_uvs[~degenerate]),
         warnings=groom.warnings + [message],
         fixed=None if groom.fixed is None else np.ascontiguousarray(groom.fixed[points]),
+        radii=None if groom.radii is None else np.ascontiguousarray(groom.radii[points]),
     )
 
 

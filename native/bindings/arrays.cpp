@@ -92,6 +92,24 @@ Span<float> as_float(const py::handle obj, const char *name)
   return span;
 }
 
+Span<float> as_radii(const py::handle obj, const int64_t points_num)
+{
+  if (obj.is_none()) {
+    return {};
+  }
+  const Span<float> radii = as_float(obj, "radii");
+  if (radii.size() != points_num) {
+    fail("radii must have one value per point (" + std::to_string(points_num) + "), not " +
+         std::to_string(radii.size()));
+  }
+  for (int64_t i = 0; i < radii.size(); i++) {
+    if (radii[i] < 0.0f) {
+      fail("radii must not be negative (row " + std::to_string(i) + ")");
+    }
+  }
+  return radii;
+}
+
 Span<vec3> as_float3(const py::handle obj, const char *name)
 {
   const Span<vec3> span = as_float3_unchecked(obj, name);

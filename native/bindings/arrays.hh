@@ -36,6 +36,8 @@ Span<int32_t> as_int(py::handle obj, const char *name);
 Span<uint8_t> as_bool(py::handle obj, const char *name);
 /* (N,) float32, all finite. */
 Span<float> as_float(py::handle obj, const char *name);
+/* Per-point radii (N,) float32, finite and ≥ 0, or an empty span for None. */
+Span<float> as_radii(py::handle obj, int64_t points_num);
 /* (N, 3, 3) float32, all finite: N frames whose rows [i, 0], [i, 1], [i, 2] are the tangent,
  * bitangent and normal (glm's column-major mat3, column by column). */
 Span<mat3> as_frames(py::handle obj, const char *name);

@@ -11,25 +11,6 @@ namespace hairdyn::bindings {
 
 namespace {
 
-/* Per-point radii (N,) float32, finite and ≥ 0, or an empty span for None. */
-Span<float> as_radii(const py::handle obj, const int64_t points_num)
-{
-  if (obj.is_none()) {
-    return {};
-  }
-  const Span<float> radii = as_float(obj, "radii");
-  if (radii.size() != points_num) {
-    fail("radii must have one value per point (" + std::to_string(points_num) + "), not " +
-         std::to_string(radii.size()));
-  }
-  for (int64_t i = 0; i < radii.size(); i++) {
-    if (radii[i] < 0.0f) {
-      fail("radii must not be negative (row " + std::to_string(i) + ")");
-    }
-  }
-  return radii;
-}
-
 py::dict hair_hair_stats(const HairHairStats &s)
 {
   py::dict d;

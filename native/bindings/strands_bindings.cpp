@@ -199,6 +199,18 @@ void bind_strands(py::module_ &m)
           "the solver).")
       .def("clear_passes", &StrandSolver::clear_passes, "Remove every pass.")
       .def(
+          "set_radii",
+          [](StrandSolver &self, const py::handle radii) {
+            PassVolumes volumes;
+            const Span<float> values = as_radii(radii, self.positions().size());
+            volumes.radii.assign(values.begin(), values.end());
+            self.set_pass_volumes(std::move(volumes));
+          },
+          py::arg("radii"),
+          "The strands' radius per point, (N,) float32 in meters (a Curves radius attribute), "
+          "for the passes' swept spheres (Ward & Lin 2003 §5.2); None: each pass's own "
+          "thickness everywhere.")
+      .def(
           "set_pinned",
           [](StrandSolver &self, const py::handle pinned) {
             if (pinned.is_none()) {
@@ -227,8 +239,8 @@ void bind_strands(py::module_ &m)
           "diverged_num", &StrandSolver::diverged_num,
           "Strands whose state became non-finite or ran away (faster than 1 km/s) in the last "
           "step; they were put back on their rest shape. Non-zero: fail the frame, the "
-          "settings are unstable (explicit integrator with stiff hinges: more substeps or the "
-          "implicit integrator).")
+          "settings are unstable (stiff hinges on the explicit integrator, or strong drag on "
+          "thin, light hair: more substeps, the implicit integrator, less wind or air drag).")
       .def(
           "set_colliders",
           [](StrandSolver &self, const ColliderSet *colliders, const CollisionParams &params) {

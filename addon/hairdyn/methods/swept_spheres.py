@@ -13,9 +13,10 @@ BODY_MAPS, BODY_SWEPT, BODY_BOTH = 0, 1, 2  # SweptSphereParams.body_collision c
 
 
 class SweptSpheresAttached(Attached):
-    def __init__(self, native, hair_hair, body, colliders, groom, thickness):
+    def __init__(self, native, hair_hair, body, colliders, groom, thickness, radii):
         self.native, self.hair_hair, self.body = native, hair_hair, body
         self.colliders, self.groom, self.thickness = colliders, groom, thickness
+        self.radii = radii
         self.ms, self.pairs, self.cutting, self.segments = [], [], 0.0, 0
 
     def after_step(self, solver, head_matrix):
@@ -42,7 +43,7 @@ class SweptSpheresAttached(Attached):
                 hair_hair_pairs=int(np.median(self.pairs)) if self.pairs else 0,
                 crossings=int(
                     self.native.count_crossings(
-                        self.groom.curve_offsets, self.positions, None, self.thickness
+                        self.groom.curve_offsets, self.positions, self.radii, self.thickness
                     )
                 ),
             )
@@ -58,6 +59,9 @@ def attach(solver, build):
     if not params.hair_hair and not use_body:
         return None
     hair_hair = body = None
+    radii = build.groom.radii  # the Curves radius attribute: each strand's own swept spheres
+    if radii is not None and hasattr(solver, "set_radii"):  # (a level of detail has its own)
+        solver.set_radii(radii)
     if params.hair_hair:  # Ward & Lin 2003 §5.5: hair-hair first (soft)...
         hair_hair = build.native.HairHairPass(params)
         solver.add_pass(hair_hair)
@@ -67,7 +71,7 @@ def attach(solver, build):
         if params.body_collision == BODY_SWEPT:
             solver.set_colliders(None, colliders.params)
     return SweptSpheresAttached(
-        build.native, hair_hair, body, colliders, build.groom, params.thickness
+        build.native, hair_hair, body, colliders, build.groom, params.thickness, radii
     )
 
 
