@@ -44,8 +44,9 @@ def test_report_tolerance_at_its_panel_minimum_counts_any_depth(open_fixture):
     open_fixture("head_shake.blend")
     hair = bpy.data.objects["Hair"]
     settings = hair.hairdyn
-    cli.apply_settings(settings, ["method=strands", "body_collision=both",
-                                  "strands.children_per_guide=0"])
+    cli.apply_settings(
+        settings, ["method=strands", "body_collision=both", "strands.children_per_guide=0"]
+    )
     lowest = settings.collision.bl_rna.properties["penetration_tolerance"].hard_min
     settings.collision.penetration_tolerance = lowest
     assert settings.collision.penetration_tolerance == 0.0
@@ -73,9 +74,15 @@ def test_the_curves_radius_attribute_sizes_the_swept_spheres(open_fixture):
             hair.data.attributes.remove(radius)
         else:
             radius.data.foreach_set("value", values * np.float32(scale))
-        cli.apply_settings(hair.hairdyn, ["method=strands", "hair_hair=true",
-                                          "swept_spheres.thickness=0.5",  # mm
-                                          "strands.children_per_guide=0"])
+        cli.apply_settings(
+            hair.hairdyn,
+            [
+                "method=strands",
+                "hair_hair=true",
+                "swept_spheres.thickness=0.5",  # mm
+                "strands.children_per_guide=0",
+            ],
+        )
         return simulation.run(bpy.context, hair, 1, 3)
 
     none, thin, thick = run_with(None), run_with(0.25), run_with(4.0)
