@@ -44,3 +44,18 @@ def test_explicit_stiff_springs_are_refused_with_the_reason():
         solver.step(1.0 / 24.0, np.eye(4, dtype=np.float32))
     assert "implicit springs" in solver.failure
     assert np.isfinite(solver.positions).all()
+
+
+def test_a_spacing_too_fine_for_the_groom_is_refused_before_sampling():
+    """Particles along a groom come from candidates every r/4 of every strand: two strands of
+    5 km at the smallest spacing (0.1 mm) would be 400 million of them, 14 GB. Refused at once,
+    with the setting to change."""
+    n = native.load()
+    offsets = np.array([0, 2, 4], np.int32)
+    points = np.zeros((4, 3), np.float32)
+    points[1, 2] = points[3, 2] = -5000.0
+    points[2:, 0] = 0.03
+    with pytest.raises(ValueError, match="Too many particles: .* raise the spacing"):
+        n.lcp_particles_from_groom(
+            n.LcpParams(particle_num=0, particle_spacing=1e-4), offsets, points
+        )

@@ -196,6 +196,13 @@ void bind_lcp(py::module_ &m)
                  "), not " + std::to_string(pins.size()));
           }
         }
+        const int64_t candidates = groom_candidates_num(offsets, points, params);
+        if (candidates > max_groom_candidates) {
+          fail("Too many particles: a particle spacing of " +
+               std::to_string(params.particle_spacing) + " m samples the strands at " +
+               std::to_string(candidates) + " places, more than the " +
+               std::to_string(max_groom_candidates) + " hairdyn may hold: raise the spacing.");
+        }
         LcpParticles particles;
         {
           py::gil_scoped_release release;
@@ -203,6 +210,12 @@ void bind_lcp(py::module_ &m)
         }
         if (particles.size() == 0) {
           fail("No particles: the strands are shorter than the particle spacing.");
+        }
+        if (particles.size() > max_lcp_particles) {
+          fail("Too many particles: the particle spacing places " +
+               std::to_string(particles.size()) + " along the strands, more than the " +
+               std::to_string(max_lcp_particles) +
+               " an LCP simulation may hold: raise the spacing or set a particle count.");
         }
         return particles_dict(std::move(particles));
       },

@@ -336,6 +336,21 @@ LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &leng
   return particles;
 }
 
+int64_t groom_candidates_num(const Span<int32_t> curve_offsets, const Span<vec3> positions,
+                             const LcpParams &params)
+{
+  const double step = 0.25 * double(params.particle_spacing);
+  double count = 0.0;
+  for (int64_t c = 0; c + 1 < curve_offsets.size(); c++) {
+    double length = 0.0;
+    for (int64_t k = curve_offsets[c]; k + 1 < curve_offsets[c + 1]; k++) {
+      length += double(glm::length(positions[k + 1] - positions[k]));
+    }
+    count += std::ceil(double(params.root_depth) / step) + std::floor(length / step) + 1.0;
+  }
+  return saturated(count);
+}
+
 LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Span<vec3> positions,
                                     const Span<vec2> root_uv, const LcpParams &params,
                                     const Span<uint8_t> pinned)

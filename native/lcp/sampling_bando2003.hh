@@ -72,6 +72,13 @@ constexpr int64_t max_lcp_neighbor_entries = 2000000000;
  * 2 max(h₁, h₂)). Refused before sampling, which would take hours there. */
 std::string find_sampling_size_error(const ScalpSampling &plan, const LcpParams &params);
 
+/* About how many candidates sample_groom_particles places along the strands (one every r/4,
+ * the root's continuation beneath the scalp included), counted without placing them, and the
+ * most the bindings let it place (36 bytes each: 3.6 GB). */
+int64_t groom_candidates_num(Span<int32_t> curve_offsets, Span<vec3> positions,
+                             const LcpParams &params);
+constexpr int64_t max_groom_candidates = 100000000;
+
 /* Poisson-disc sampling of the scalp volume (§3.2) in the scalp's space; gravity_dir is the
  * unit gravity direction in that space (world −Z for a world-space scalp). */
 LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &length,
