@@ -518,6 +518,11 @@ float segment_penetration_share(const Span<int32_t> curve_offsets, const Span<ve
   if (segments_num <= 0 || colliders.colliders_num() == 0) {
     return 0.0f;
   }
+  /* Each collider's tolerance in its object units. */
+  std::vector<float> tolerances;
+  for (int64_t i = 0; i < colliders.colliders_num(); i++) {
+    tolerances.push_back(tolerance_wo / uniform_scale(colliders.collider(i).object_to_world()));
+  }
   const double cutting = parallel_sum(curves_num, 16, [&](const IndexRange curves) {
     double count = 0.0;
     for (int64_t c = curves.start; c < curves.one_after_last(); c++) {
@@ -525,7 +530,7 @@ float segment_penetration_share(const Span<int32_t> curve_offsets, const Span<ve
         bool cuts = false;
         for (int64_t i = 0; i < colliders.colliders_num() && !cuts; i++) {
           const Collider &collider = colliders.collider(i);
-          const float tolerance = tolerance_wo / uniform_scale(collider.object_to_world());
+          const float tolerance = tolerances[size_t(i)];
           const vec3 a = transform_point(collider.world_to_object(), positions_wo[k]);
           const vec3 b = transform_point(collider.world_to_object(), positions_wo[k + 1]);
           /* At most a quarter of the tolerance apart, and at most max_segment_samples. */
