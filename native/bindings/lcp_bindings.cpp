@@ -148,18 +148,20 @@ void bind_lcp(py::module_ &m)
         {
           py::gil_scoped_release release;
           const ScalpMap scalp(v, t, weights);
-          error = scalp.is_valid() ? find_length_map_error(scalp, length) :
-                                     "the scalp's harmonic map could not be solved";
-          if (error.empty()) {
-            error = find_sampling_size_error(plan_scalp_sampling(scalp, length, params), params);
-            if (!error.empty()) {
-              error = "Too many particles: " + error + ".";
-            }
+          const std::string invalid = scalp.is_valid() ?
+                                          find_length_map_error(scalp, length) :
+                                          "the scalp's harmonic map could not be solved";
+          const std::string too_large =
+              invalid.empty() ?
+                  find_sampling_size_error(plan_scalp_sampling(scalp, length, params), params) :
+                  "";
+          if (!invalid.empty()) {
+            error = "Invalid length map or scalp: " + invalid + ".";
+          }
+          else if (!too_large.empty()) {
+            error = "Too many particles: " + too_large + ".";
           }
           else {
-            error = "Invalid length map or scalp: " + error + ".";
-          }
-          if (error.empty()) {
             particles = sample_scalp_particles(scalp, length, params, vec3(0.0f, 0.0f, -1.0f));
           }
         }
