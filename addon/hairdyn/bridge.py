@@ -189,12 +189,9 @@ def read_radii(obj, points_num, matrix_world):
     "radius" of a Curves object (scaled by the object's mean scale), or (None, []) when it has
     none, or one for other points than the evaluated ones; (None, [sentence]) when a value is
     negative or not a number."""
-    attribute = obj.data.attributes.get("radius")
-    if (attribute is None or attribute.domain != 'POINT' or attribute.data_type != 'FLOAT'
-            or len(attribute.data) != points_num):
+    radii = _point_values(obj, "radius", 'FLOAT', points_num, np.float32)
+    if radii is None:
         return None, []
-    radii = np.empty(points_num, dtype=np.float32)
-    attribute.data.foreach_get("value", radii)
     if not (np.isfinite(radii).all() and (radii >= 0.0).all()):
         message = (f"the radius attribute of '{obj.name}' has values that are negative or not "
                    "numbers; the swept spheres' Strand Thickness stands for it")
@@ -208,13 +205,21 @@ def read_fixed(obj, points_num):
     """(N,) bool from the BOOLEAN point attribute FIXED_ATTRIBUTE of a Curves object, or None
     when it has none (or one of another kind, or for other points than the evaluated ones: a
     modifier that adds or removes points leaves the pins without their points)."""
-    attribute = obj.data.attributes.get(FIXED_ATTRIBUTE)
-    if (attribute is None or attribute.domain != 'POINT' or attribute.data_type != 'BOOLEAN'
+    fixed = _point_values(obj, FIXED_ATTRIBUTE, 'BOOLEAN', points_num, bool)
+    return fixed if fixed is not None and fixed.any() else None
+
+
+def _point_values(obj, name, data_type, points_num, dtype):
+    """(N,) values of the Curves object's point attribute `name` of `data_type`, or None when it
+    has none of that kind and count. The original ID's: evaluated attributes may be read-only
+    views that Blender refuses to hand out."""
+    attribute = obj.data.attributes.get(name)
+    if (attribute is None or attribute.domain != 'POINT' or attribute.data_type != data_type
             or len(attribute.data) != points_num):
         return None
-    fixed = np.zeros(points_num, dtype=bool)
-    attribute.data.foreach_get("value", fixed)
-    return fixed if fixed.any() else None
+    values = np.empty(points_num, dtype=dtype)
+    attribute.data.foreach_get("value", values)
+    return values
 
 
 def read_particle_hair(obj, depsgraph):
