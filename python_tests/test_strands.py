@@ -220,8 +220,8 @@ def test_a_run_switches_the_particle_hair_off_while_it_steps(open_fixture, monke
 
 @pytest.mark.parametrize("integrator", ['IMPLICIT', 'EXPLICIT'])
 def test_a_diverged_run_says_what_to_change(open_fixture, integrator):
-    """The wind at the panel's top speed, 4 substeps: the drag (explicit) outruns the thin
-    hair's steps. The run stops with a sentence whose advice fits the settings: the implicit
+    """The wind at the panel's top speed (100 m/s), 4 substeps: the gale whips the thin hair
+    faster than its steps follow. The run stops with a sentence whose advice fits the settings: the implicit
     integrator is suggested only where it is not already in use."""
     hair = strands_on(open_fixture, "head_shake.blend")
     hair.hairdyn.strands.integrator = integrator

@@ -239,8 +239,9 @@ void bind_strands(py::module_ &m)
           "diverged_num", &StrandSolver::diverged_num,
           "Strands whose state became non-finite or ran away (faster than 1 km/s) in the last "
           "step; they were put back on their rest shape. Non-zero: fail the frame, the "
-          "settings are unstable (stiff hinges on the explicit integrator, or strong drag on "
-          "thin, light hair: more substeps, the implicit integrator, less wind or air drag).")
+          "settings are unstable (stiff hinges or strong drag on the explicit integrator, or a "
+          "gale past about 50 m/s: more substeps, the implicit integrator, less wind or air "
+          "drag).")
       .def(
           "set_colliders",
           [](StrandSolver &self, const ColliderSet *colliders, const CollisionParams &params) {

@@ -30,6 +30,17 @@
  * inertia D_i (the "armature" of Featherstone §7.3): still one O(N) pass, unconditionally
  * stable in the springs and damping.
  *
+ * Drag (Kurihara 1993, eq. 6, and the form drag: ForceField) is stiff on thin, light hair: in
+ * a gale it brings a free hair to the air's speed within a millisecond, a tenth of a substep.
+ * The implicit integrator takes it linearly implicit as it does the springs: h ∂F/∂v (bounded
+ * isotropically: ForceField::drag_stiffness) adds to each rod's mass in its inertia I_P (not
+ * in its bias forces), so the step solves (M + h C) q̈ = F, and the force is taken whole (the
+ * explicit integrator limits it over the step instead). Spread along the rod, the drag also
+ * puts a couple on a rod that turns about its centre (ForceField::drag_couple): a force at
+ * the centre alone leaves the chain's zigzag modes undamped, and a gale fed them until the
+ * strand ran away. A chain hung in a steady wind settles at the angle its forces give on any
+ * substep (test AChainInASteadyWindHangsAtTheAngleItsForcesGive).
+ *
  * Gravity, drag, head forces and the velocity products are explicit, taken at the middle of
  * the step (explicit midpoint): at the rates q̇ + h q̈₀ / 2, with q̈₀ the chain's acceleration
  * at the step's start. Taken at q̇ (explicit Euler), they let a tumbling chain gain energy
@@ -108,10 +119,12 @@ template<int W> struct alignas(chain::lane_alignment) StrandSolver::ArticulatedT
   chain::V3<F> omega;            /* the segment's turn */
   chain::V3<F> half;             /* d t / 2, to the segment's centre */
   chain::V3<F> force;            /* F at the centre */
+  chain::V3<F> couple;           /* the drag's couple (ForceField::drag_couple) */
   chain::V3<F> tip, tip_velocity; /* the segment's end and its velocity (the contact query's) */
   F rate_product;                /* θ̇ φ̇ */
   chain::M3<F> rest;             /* the rest rotation from the parent's frame */
   F m, d, k;                     /* mass, length, hinge stiffness */
+  F drag_mass; /* h times the drag's stiffness over the rod (implicit integrator; else 0), kg */
   chain::V2<F> angles, rates;    /* q, q̇ */
 };
 
@@ -177,6 +190,7 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
     const V3<R> parent_omega = widen(x.parent_omega), omega = widen(x.omega);
     const V3<R> half = widen(x.half), force = widen(x.force);
     const R m = widen(x.m), d = widen(x.d), k = widen(x.k);
+    const R inertial = m + widen(x.drag_mass); /* the rod's mass in I_P, drag's armature added */
     body.s_theta = widen(x.e_theta);
     body.s_phi = -pole;
     body.arm = arm;
@@ -184,22 +198,22 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
                         widen(x.rate_product) * cross(pole, body.s_theta);
     body.bias_linear = cross(parent_omega, cross(parent_omega, arm));
     /* I^A and p^A: the rod's own, added to what its child hands it (zero at the tip). */
-    const R transverse = m * d * d / 3.0;
+    const R transverse = inertial * d * d / 3.0;
     S3<R> a = child_a, c = child_c;
     M3<R> b = child_b;
     a.xx = a.xx + transverse;
     a.yy = a.yy + transverse;
     a.zz = a.zz + transverse;
-    b.c[0].y = b.c[0].y + m * half.z;
-    b.c[0].z = b.c[0].z + m * -half.y;
-    b.c[1].x = b.c[1].x + m * -half.z;
-    b.c[1].z = b.c[1].z + m * half.x;
-    b.c[2].x = b.c[2].x + m * half.y;
-    b.c[2].y = b.c[2].y + m * -half.x;
-    c.xx = c.xx + m;
-    c.yy = c.yy + m;
-    c.zz = c.zz + m;
-    const V3<R> p_torque = child_torque - cross(half, force);
+    b.c[0].y = b.c[0].y + inertial * half.z;
+    b.c[0].z = b.c[0].z + inertial * -half.y;
+    b.c[1].x = b.c[1].x + inertial * -half.z;
+    b.c[1].z = b.c[1].z + inertial * half.x;
+    b.c[2].x = b.c[2].x + inertial * half.y;
+    b.c[2].y = b.c[2].y + inertial * -half.x;
+    c.xx = c.xx + inertial;
+    c.yy = c.yy + inertial;
+    c.zz = c.zz + inertial;
+    const V3<R> p_torque = child_torque - cross(half, force) - widen(x.couple);
     const V3<R> p_force = child_force + (m * cross(omega, cross(omega, half)) - force);
     const R gamma = damping * k; /* Kelvin–Voigt: γ = τ k */
     const R armature = implicit ? hd * gamma + hd * hd * k : zero;
@@ -655,6 +669,7 @@ template<int W>
   }
   const size_t n = size_t(curve_points(curve_offsets_, curves[0]).size) - 1;
   const float density = line_density();
+  const bool implicit = params_.integrator == Integrator::Implicit;
   /* The head, its forces and the wind field are the substep's for every lane; only the step
    * length h differs between lanes (a strand cutting its substep). */
   const vec3 head_center = substep.pose.translation;
@@ -717,7 +732,16 @@ template<int W>
     const V3<Floats> tip_velocity = node_velocity + cross(omega, d * t) +
                                     substep.head_velocity.of_point(tip - head_center);
     ArticulatedTerms<W> &x = terms[i];
-    x.force = substep.forces.on_segment(d, center, center_velocity, wind, h);
+    /* The segment's turn across its axis relative to the air, for the drag's couple. */
+    const V3<Floats> turn = substep.head_velocity.angular + omega;
+    const V3<Floats> spin = turn - dot(turn, t) * t;
+    const Floats air_speed = substep.forces.rod_air_speed(d, center_velocity, wind, spin);
+    /* The implicit integrator takes the drag's stiffness into the rod's inertia (see the top
+     * of the file); the explicit one limits the drag over the step. */
+    const Floats drag_h = implicit ? Floats{} : h;
+    x.force = substep.forces.on_segment(d, center, center_velocity, wind, drag_h);
+    x.couple = substep.forces.drag_couple(d, spin, air_speed, drag_h);
+    x.drag_mass = implicit ? h * d * substep.forces.drag_stiffness(air_speed) : Floats{};
     x.tip = tip;
     x.tip_velocity = tip_velocity;
     x.t = t;
@@ -961,7 +985,9 @@ template<int W>
   };
   /* Stage 0, for the strands whose trend is not known: the predictor's q̈ at the step's start
    * rates (the fastest turn, and so a cut step, judged on them); stage 1 takes the step from
-   * the rates at its middle (see the top). */
+   * the rates at its middle (see the top), and a strand cuts its step if those turn too fast,
+   * predicted or not: a strand at rest caught by a gale turns by nothing at the start of its
+   * step and by tens of radians over it. */
   uint8_t queried[W];
   if (any_predict) {
     for (int lane = 0; lane < W; lane++) {
@@ -990,7 +1016,7 @@ template<int W>
   /* The strands that take the step commit it (a strand that cuts it is left unchanged). */
   uint8_t committed[W] = {};
   for (int lane = 0; lane < lanes_num; lane++) {
-    if (!predict[lane] && r_outcomes[lane] == 1) {
+    if (r_outcomes[lane] == 1) {
       r_outcomes[lane] = steps_needed(lane, fastest_turn[lane]);
     }
     if (r_outcomes[lane] > 1) {

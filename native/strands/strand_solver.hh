@@ -73,19 +73,61 @@ struct ForceField {
   /* N, the force on a segment of length d whose centre is at r, moving at v, over a step of
    * h. The form drag is explicit; it is limited to what it can do over the step, q |u|² / (1 +
    * h q |u| / c) (linearly implicit in the speed |u| relative to the air), so it slows a
-   * segment down and never turns it around, whatever the step. S and V: float and vec3, or
-   * several segments in lanes (strands/chain_lanes.hh). */
+   * segment down and never turns it around, whatever the step. h = 0: the drag itself, for a
+   * step that takes its stiffness into the inertia instead (drag_stiffness). S and V: float
+   * and vec3, or several segments in lanes (strands/chain_lanes.hh). */
   template<class S, class V>
   V on_segment(const S &d, const V &r, const V &v, const V &wind, const S &h) const
   {
     const V relative = wind - v;
-    const S speed = length(relative);
-    const S rate = form_drag * speed; /* kg/m/s */
-    const S drag = mass_per_length > 0.0f ?
-                       rate * mass_per_length / (mass_per_length + h * rate) :
-                       rate;
+    const S drag = limited(form_drag * length(relative), h);
     return d * (base + position_gradient * r + velocity_gradient * v + air_drag * wind +
                 drag * relative);
+  }
+
+  /* m/s: the speed of the air past a rod of length d whose centre moves at v and which turns
+   * at `spin` across its axis (relative to the air): |v_wind − v| + |spin| d / √12, the speed
+   * at its centre plus its spin's RMS speed along it (at most √2 times the RMS of the two). */
+  template<class S, class V>
+  [[gnu::always_inline]] S rod_air_speed(const S &d, const V &v, const V &wind,
+                                         const V &spin) const
+  {
+    return length(wind - v) + length(spin) * (d * 0.28867513f);
+  }
+
+  /* N·m, beside on_segment's force at the centre: the couple the drag puts on a rod of length
+   * d turning at `spin` across its axis, −(c_air + q ū) d³ / 12 spin, ū its rod_air_speed.
+   * For the linear drag it is exact (∫ s t × (−c_air spin × s t) ds over the rod); the form
+   * drag is taken at ū everywhere along the rod (a rod spinning in still air: q |spin| d⁴ / 32
+   * exactly, 0.77 times that here). A force at the centre alone leaves a segment that turns
+   * about its centre undamped: the chain's zigzag modes, which a gale fed until the strand
+   * ran away. Limited over a step of h as on_segment's form drag. */
+  template<class S, class V>
+  [[gnu::always_inline]] V drag_couple(const S &d, const V &spin, const S &air_speed,
+                                       const S &h) const
+  {
+    return (-(d * d * d) * (1.0f / 12.0f)) * (air_drag + limited(form_drag * air_speed, h)) *
+           spin;
+  }
+
+  /* kg/m/s, per length: a bound of the rate at which the drag's force changes with the
+   * element's velocity, ‖∂(c_air u + q |u| u) / ∂v‖ = c_air + 2 q |u| (u = v_wind − v, the
+   * form drag's q (|u| 1 + u uᵀ / |u|) having 2 q |u| along u), at the rod's RMS air speed
+   * (rod_air_speed ≥ |u|, which covers the couple's too). A linearly implicit step adds h
+   * times this to the element's mass in its inertia (the articulated model's implicit
+   * integrator). */
+  template<class S> [[gnu::always_inline]] S drag_stiffness(const S &air_speed) const
+  {
+    return air_drag + 2.0f * form_drag * air_speed;
+  }
+
+ private:
+  /* A drag rate (kg/m/s) limited to what it can do over a step of h: rate / (1 + h rate / c).
+   * h = 0: the rate itself. */
+  template<class S> [[gnu::always_inline]] S limited(const S &rate, const S &h) const
+  {
+    return mass_per_length > 0.0f ? rate * mass_per_length / (mass_per_length + h * rate) :
+                                    rate;
   }
 };
 

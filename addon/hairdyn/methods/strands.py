@@ -218,8 +218,8 @@ class Strands(Method):
                 f"{self.solver.diverged_num} strands diverged (a point passed 1,000 m/s or "
                 "stopped being finite): "
                 + ("use the implicit integrator, " if self.explicit else "")
-                + "more substeps, softer hinges, or less wind and air drag (drag is stiff on "
-                "thin, light hair: its step is explicit)"
+                + "more substeps, softer hinges, or less wind and air drag (a gale whips "
+                "thin, light hair faster than the steps follow)"
             )
         for item in self.attached:
             item.after_step(self.solver, head_matrix)
