@@ -157,6 +157,33 @@ TEST(LodHierarchy, SkeletonsHaveTheirParentsPointCountAndStoredOffsets)
   }
 }
 
+/* A value per strand point at the skeletons' control points: one that grows linearly along
+ * each strand (the cap groom's segments are equal) comes out linear in the control point's
+ * index, root and tip values at the ends, on any point count against the skeleton's. */
+TEST(LodHierarchy, PointValuesAtTheControlPointsFollowTheArcLength)
+{
+  for (const int points_num : {4, 10, 23}) {
+    SCOPED_TRACE(points_num);
+    const CapGroom groom(40, points_num);
+    const LodHierarchy hierarchy = build(groom, small_params());
+    std::vector<float> values;
+    for (int64_t s = 0; s < groom.strands_num(); s++) {
+      for (int i = 0; i < points_num; i++) {
+        values.push_back(float(s) + float(i) / float(points_num - 1)); /* s at the root */
+      }
+    }
+    const int32_t n = hierarchy.skeleton_points_num();
+    const std::vector<float> at = hierarchy.at_control_points(values);
+    ASSERT_EQ(at.size(), size_t(groom.strands_num()) * size_t(n));
+    for (int64_t s = 0; s < groom.strands_num(); s++) {
+      for (int32_t k = 0; k < n; k++) {
+        EXPECT_NEAR(at[size_t(s * n + k)], float(s) + float(k) / float(n - 1), 1e-4f)
+            << "strand " << s << ", control point " << k;
+      }
+    }
+  }
+}
+
 TEST(LodHierarchy, GivenUvsDecideTheStrips)
 {
   /* Roots whose UVs put strands 0..99 left and 100..199 right of u = 0.5: two top strips of

@@ -66,7 +66,8 @@ struct SheetsRun {
 
 /* 40 frames at 100 fps, 4 substeps each, the level of detail held at `level`, with the
  * hair–hair pass or without. */
-SheetsRun run_sheets(const int32_t level, const bool hair_hair)
+SheetsRun run_sheets(const int32_t level, const bool hair_hair,
+                     const std::vector<float> &radii = {})
 {
   const Sheets sheets;
   StrandParams strand_params;
@@ -78,6 +79,7 @@ SheetsRun run_sheets(const int32_t level, const bool hair_hair)
   SweptSphereParams params;
   params.hair_hair = true;
   HairHairPass pass(params);
+  solver.set_radii(radii);
   if (hair_hair) {
     solver.add_pass(&pass, params.thickness);
   }
@@ -200,6 +202,28 @@ TEST(LodSweptSpheres, HairHairKeepsSheetsApartAtEveryLevel)
     /* Without, A swings through B and hangs on the near side; with, it drapes over B. */
     EXPECT_LT(off.tip_x, 0.06f);
     EXPECT_GT(on.tip_x, 0.06f);
+  }
+}
+
+/* The strands' own radii (a Curves radius attribute) size the groups' volumes: radii equal to
+ * the pass's thickness everywhere give the thickness's run bit for bit, and a quarter of it,
+ * then four times it, keep the sheets less, then more, apart. */
+TEST(LodSweptSpheres, TheStrandsRadiiSizeTheGroupVolumes)
+{
+  const size_t points = Sheets().groom.positions.size();
+  const float thickness = SweptSphereParams().thickness;
+  for (const int32_t level : {0, 2}) {
+    SCOPED_TRACE("level " + std::to_string(level));
+    const SheetsRun plain = run_sheets(level, true);
+    const SheetsRun same = run_sheets(level, true, std::vector<float>(points, thickness));
+    EXPECT_EQ(same.pairs, plain.pairs);
+    EXPECT_EQ(same.crossings, plain.crossings);
+    EXPECT_EQ(same.tip_x, plain.tip_x);
+    const SheetsRun thin = run_sheets(level, true, std::vector<float>(points, 0.25f * thickness));
+    const SheetsRun thick = run_sheets(level, true, std::vector<float>(points, 4.0f * thickness));
+    /* Sheet A drapes over B (at x = 0.06 m) the farther out, the thicker the volumes. */
+    EXPECT_LT(thin.tip_x, plain.tip_x);
+    EXPECT_GT(thick.tip_x, plain.tip_x);
   }
 }
 

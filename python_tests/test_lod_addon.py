@@ -225,3 +225,26 @@ def test_swept_spheres_run_on_the_skeletons_of_every_level(open_fixture):
     assert len(np.unique(levels(hair))) >= 2
     # Measured: 2.0% of the hair length with both passes, 0.5% without either.
     assert 0.0 < report["lod_error"] < 0.04
+
+
+def test_the_curves_radius_attribute_sizes_the_group_volumes(open_fixture):
+    """Under level of detail the groups' swept spheres take their strands' Curves radius
+    attribute (the widest strand's radius at each skeleton point, plus the group's spread), as
+    plain strands do; Strand Thickness stands in where there is none."""
+
+    def run_with(scale):
+        hair = lod_hair(open_fixture, "head_shake.blend")
+        settings = hair.hairdyn
+        settings.lod_options.camera = camera_facing_hair(hair, 0.3, "Close")
+        radius = hair.data.attributes["radius"]
+        if scale is None:
+            hair.data.attributes.remove(radius)
+        else:
+            values = np.empty(len(radius.data), dtype=np.float32)
+            radius.data.foreach_get("value", values)
+            radius.data.foreach_set("value", values * np.float32(scale))
+        cli.apply_settings(settings, ["hair_hair=true", "swept_spheres.thickness=0.5"])  # mm
+        return simulation.run(bpy.context, hair, 1, 3)
+
+    none, thin, thick = run_with(None), run_with(0.25), run_with(4.0)
+    assert thin["hair_hair_pairs"] < none["hair_hair_pairs"] < thick["hair_hair_pairs"]

@@ -138,6 +138,15 @@ void bind_lod(py::module_ &m)
           "volume of its group (Ward & Lin 2003 section 5.2: a strip a rectangle swept sphere, a "
           "cluster or strand group a line swept sphere, strand_radius in m plus the group's "
           "spread); kept alive by the solver.")
+      .def(
+          "set_radii",
+          [](LodSolver &self, const py::handle radii) {
+            self.set_radii(as_radii(radii, self.positions().size()));
+          },
+          py::arg("radii"),
+          "The strands' radius per point, (N,) float32 in meters (a Curves radius attribute), "
+          "for the passes' group volumes: at each skeleton point a group's widest strand's "
+          "radius there plus its spread; None: add_pass's strand_radius.")
       .def("pass_ms", &LodSolver::pass_ms, py::arg("name"),
            "Milliseconds the pass named `name` took during the last step (0: no such pass).")
       .def_property_readonly(

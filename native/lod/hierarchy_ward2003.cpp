@@ -425,6 +425,31 @@ LodHierarchy::LodHierarchy(const Span<int32_t> curve_offsets, const Span<vec3> r
   }
 }
 
+std::vector<float> LodHierarchy::at_control_points(const Span<float> point_values) const
+{
+  const int32_t n = skeleton_points_num_;
+  const Span<int32_t> offsets = curve_offsets();
+  std::vector<float> values(size_t(strands_num()) * size_t(n));
+  parallel_for(strands_num(), 256, [&](const IndexRange range) {
+    for (int64_t strand = range.start; strand < range.one_after_last(); strand++) {
+      const IndexRange points = curve_points(offsets, strand);
+      const auto place = [&](const int64_t i) {
+        return float(point_segments_[size_t(i)]) + point_weights_[size_t(i)];
+      };
+      int64_t i = points.start;
+      for (int32_t k = 0; k < n; k++) {
+        while (i + 2 < points.one_after_last() && place(i + 1) < float(k)) {
+          i++;
+        }
+        const float span = place(i + 1) - place(i);
+        const float t = span > 0.0f ? glm::clamp((float(k) - place(i)) / span, 0.0f, 1.0f) : 0.0f;
+        values[size_t(strand * n + k)] = glm::mix(point_values[i], point_values[i + 1], t);
+      }
+    }
+  });
+  return values;
+}
+
 std::vector<int32_t> LodHierarchy::level_nodes(const int32_t level) const
 {
   std::vector<int32_t> result;

@@ -93,6 +93,12 @@ class LodHierarchy {
   Span<int32_t> point_segments() const { return point_segments_; }
   Span<float> point_weights() const { return point_weights_; }
 
+  /* A value per strand point (N, the groom's points) at each strand's n control points:
+   * strand s's value at k is interpolated linearly between the two of its points whose places
+   * along a skeleton (point_segments + point_weights: 0 at the root, n − 1 at the tip) bracket
+   * k. strands_num() × n values, strand by strand. */
+  std::vector<float> at_control_points(Span<float> point_values) const;
+
   /* Nodes of level `level`: those at that depth plus the leaves above it. Every level covers
    * each strand exactly once. */
   std::vector<int32_t> level_nodes(int32_t level) const;

@@ -108,6 +108,27 @@ void LodSolver::add_pass(SubstepPass *const pass, const float strand_radius)
   solver_->add_pass(pass);
 }
 
+void LodSolver::set_radii(const Span<float> point_radii)
+{
+  node_radii_.clear();
+  if (!point_radii.is_empty()) {
+    const int32_t n = hierarchy_.skeleton_points_num();
+    const std::vector<float> strand_radii = hierarchy_.at_control_points(point_radii);
+    node_radii_.assign(size_t(hierarchy_.nodes_num()) * size_t(n), 0.0f);
+    parallel_for(hierarchy_.nodes_num(), 64, [&](const IndexRange range) {
+      for (int64_t node = range.start; node < range.one_after_last(); node++) {
+        for (const int32_t strand : hierarchy_.strands(node)) {
+          for (int32_t k = 0; k < n; k++) {
+            float &radius = node_radii_[size_t(node * n + k)];
+            radius = std::max(radius, strand_radii[size_t(strand) * size_t(n) + size_t(k)]);
+          }
+        }
+      }
+    });
+  }
+  update_pass_volumes();
+}
+
 void LodSolver::update_pass_volumes()
 {
   const int32_t n = hierarchy_.skeleton_points_num();
@@ -135,7 +156,7 @@ void LodSolver::update_pass_volumes()
       const Span<vec3> rest = hierarchy_.rest_skeleton(node);
       for (int32_t k = 0; k < n; k++) {
         const size_t i = size_t(node * n + k);
-        volumes.radii[i] = strand_radius_ + spread[k];
+        volumes.radii[i] = (node_radii_.empty() ? strand_radius_ : node_radii_[i]) + spread[k];
         volumes.strip_half_widths_hs[i] = world_to_head * half_width[k];
         /* Groups overlap at rest where their strands interleave: they may stay as close as
          * that (GroupVolumes). */

@@ -82,6 +82,12 @@ class LodSolver {
    * stay as close as at rest (GroupVolumes), and as near the colliders as at rest
    * (SubstepState::rest_clearances). The pass must outlive the solver. */
   void add_pass(SubstepPass *pass, float strand_radius);
+  /* The strands' own radius per point (m, one per point of the groom: a Curves radius
+   * attribute) in place of add_pass's strand_radius: at each control point a group's swept
+   * sphere is its widest strand's radius there (each strand's radii interpolated along it to
+   * the control point, where its points lie along the skeleton) plus the group's spread.
+   * Empty: add_pass's strand_radius everywhere. */
+  void set_radii(Span<float> point_radii);
   /* Milliseconds the pass named `name` took during the last step. */
   double pass_ms(const std::string &name) const { return solver_->pass_ms(name); }
   /* One frame: select and switch (§6.1-6.3) from the state at the end of the last frame and
@@ -160,7 +166,8 @@ class LodSolver {
    * head where the last step left it; a node whose nodes are current and whose state this
    * leaves unchanged bit for bit is left alone. */
   void take_state(int32_t node, Span<vec2> angles, Span<vec2> rates);
-  /* The volumes the passes see (add_pass), from strand_radius_ and the colliders. */
+  /* The volumes the passes see (add_pass), from node_radii_ (else strand_radius_) and the
+   * colliders. */
   void update_pass_volumes();
 
   LodHierarchy hierarchy_;
@@ -171,6 +178,7 @@ class LodSolver {
   const ColliderSet *colliders_ = nullptr;
   const ColliderSet *bodies_ = nullptr; /* set_bodies' */
   float strand_radius_ = 0.0f; /* m, add_pass's */
+  std::vector<float> node_radii_; /* m, per node and control point: set_radii's, or empty */
 
   std::unique_ptr<StrandSolver> solver_;
   /* Per node: stepped by the next step. */

@@ -225,6 +225,14 @@ class LodStrands(Attached):
                 twin = self.native.SsvObjectPass(self.colliders, substep_pass.params)
             self.fine.add_pass(twin)
 
+    def set_radii(self, radii):
+        """The Curves radius attribute for the passes' volumes: a group's at each skeleton
+        point is its widest strand's radius there plus its spread; the fine reference's strands
+        take their own."""
+        self.solver.set_radii(radii)
+        if self.fine is not None:
+            self.fine.set_radii(radii)
+
     def pass_ms(self, name):
         return self.solver.pass_ms(name)
 

@@ -60,7 +60,7 @@ def attach(solver, build):
         return None
     hair_hair = body = None
     radii = build.groom.radii  # the Curves radius attribute: each strand's own swept spheres
-    if radii is not None and hasattr(solver, "set_radii"):  # (a level of detail has its own)
+    if radii is not None:
         solver.set_radii(radii)
     if params.hair_hair:  # Ward & Lin 2003 §5.5: hair-hair first (soft)...
         hair_hair = build.native.HairHairPass(params)
