@@ -272,8 +272,9 @@ LcpParticles in_space_order(const LcpParticles &particles, const float cell)
   }
   std::vector<std::pair<uint64_t, int64_t>> keys(static_cast<size_t>(n));
   for (int64_t i = 0; i < n; i++) {
-    const vec3 q = glm::clamp((particles.positions[size_t(i)] - low) / cell, vec3(0.0f),
-                              vec3(float(0x1fffff)));
+    vec3 q = glm::clamp((particles.positions[size_t(i)] - low) / cell, vec3(0.0f),
+                        vec3(float(0x1fffff)));
+    q = is_finite(q) ? q : vec3(0.0f); /* never a NaN cast to an integer */
     keys[size_t(i)] = {spread_bits(uint64_t(q.x)) | spread_bits(uint64_t(q.y)) << 1 |
                            spread_bits(uint64_t(q.z)) << 2,
                        i};
