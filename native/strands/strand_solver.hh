@@ -112,7 +112,7 @@ struct ForceField {
 
   /* kg/m/s, per length: a bound of the rate at which the drag's force changes with the
    * element's velocity, ‖∂(c_air u + q |u| u) / ∂v‖ = c_air + 2 q |u| (u = v_wind − v, the
-   * form drag's q (|u| 1 + u uᵀ / |u|) having 2 q |u| along u), at the rod's RMS air speed
+   * form drag's q (|u| 1 + u uᵀ / |u|) having 2 q |u| along u), at the rod's air speed
    * (rod_air_speed ≥ |u|, which covers the couple's too). A linearly implicit step adds h
    * times this to the element's mass in its inertia (the articulated model's implicit
    * integrator). */
