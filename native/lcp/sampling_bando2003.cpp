@@ -10,6 +10,7 @@
 #include "core/parallel.hh"
 #include "core/spatial_grid.hh"
 #include "groom/groom.hh"
+#include "groom/metrics.hh"
 #include "lcp/interactions_bando2003.hh"
 
 namespace hairdyn {
@@ -266,10 +267,8 @@ uint64_t spread_bits(uint64_t x)
 LcpParticles in_space_order(const LcpParticles &particles, const float cell)
 {
   const int64_t n = particles.size();
-  vec3 low(std::numeric_limits<float>::max());
-  for (const vec3 &p : particles.positions) {
-    low = glm::min(low, p);
-  }
+  vec3 low, high;
+  point_bounds(particles.positions, low, high);
   std::vector<std::pair<uint64_t, int64_t>> keys(static_cast<size_t>(n));
   for (int64_t i = 0; i < n; i++) {
     vec3 q = glm::clamp((particles.positions[size_t(i)] - low) / cell, vec3(0.0f),
