@@ -38,6 +38,22 @@ def shown(struct_name, field_name, si_value):
     return si_value * next(f for f in fields if f["name"] == field_name)["display_scale"]
 
 
+def scale_radius_attribute(hair, scale, negative_row=None):
+    """The Curves object's point attribute "radius" times `scale`, or removed when scale is
+    None; with negative_row, that point's radius made -1 first (a broken attribute)."""
+    import numpy as np
+
+    radius = hair.data.attributes["radius"]
+    if scale is None:
+        hair.data.attributes.remove(radius)
+        return
+    values = np.empty(len(radius.data), dtype=np.float32)
+    radius.data.foreach_get("value", values)
+    if negative_row is not None:
+        values[negative_row] = -1.0
+    radius.data.foreach_set("value", values * np.float32(scale))
+
+
 @pytest.fixture(scope="session", autouse=True)
 def addon():
     if not hasattr(bpy.types.Object, "hairdyn"):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from mathutils import Vector
 
+from conftest import scale_radius_attribute
 from hairdyn import bake, cli, native, simulation, ui
 from hairdyn.errors import HairdynError
 from layout_recorder import Layout
@@ -236,13 +237,7 @@ def test_the_curves_radius_attribute_sizes_the_group_volumes(open_fixture):
         hair = lod_hair(open_fixture, "head_shake.blend")
         settings = hair.hairdyn
         settings.lod_options.camera = camera_facing_hair(hair, 0.3, "Close")
-        radius = hair.data.attributes["radius"]
-        if scale is None:
-            hair.data.attributes.remove(radius)
-        else:
-            values = np.empty(len(radius.data), dtype=np.float32)
-            radius.data.foreach_get("value", values)
-            radius.data.foreach_set("value", values * np.float32(scale))
+        scale_radius_attribute(hair, scale)
         cli.apply_settings(settings, ["hair_hair=true", "swept_spheres.thickness=0.5"])  # mm
         return simulation.run(bpy.context, hair, 1, 3)
 

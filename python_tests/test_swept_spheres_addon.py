@@ -3,6 +3,7 @@ segment-exact body collision passes, set from the panel's group or --set, and th
 
 import bpy
 
+from conftest import scale_radius_attribute
 from hairdyn import cli, simulation
 
 
@@ -60,20 +61,11 @@ def test_the_curves_radius_attribute_sizes_the_swept_spheres(open_fixture):
     """Each strand's swept spheres take its Curves radius attribute (in world meters, the
     object's scale applied); Strand Thickness stands in where there is none, or where the
     attribute holds a negative value (with a warning in the report)."""
-    import numpy as np
 
     def run_with(scale=None, broken=False):
         open_fixture("head_shake.blend")
         hair = bpy.data.objects["Hair"]
-        radius = hair.data.attributes["radius"]
-        values = np.empty(len(radius.data), dtype=np.float32)
-        radius.data.foreach_get("value", values)
-        if broken:
-            values[5] = -1.0
-        if scale is None:
-            hair.data.attributes.remove(radius)
-        else:
-            radius.data.foreach_set("value", values * np.float32(scale))
+        scale_radius_attribute(hair, scale, negative_row=5 if broken else None)
         cli.apply_settings(
             hair.hairdyn,
             [
