@@ -38,6 +38,11 @@ vec3 swing_onto_plane(const vec3 &root, const vec3 &tip, const float d, const Co
   return foot + (std::sqrt(d * d - height * height) / along_length) * along;
 }
 
+/* κ of the articulated take-back's φ̇ near the chart's pole (take_back_strand): the twist's
+ * weight against the node's velocity. 0.01 keeps the rate within 1% of the exact one while
+ * |cos θ| > 0.7 and bounds it by 5 times the node's speed over the segment's length. */
+constexpr float pole_twist_weight = 0.01f;
+
 /* The part of a change δ of a hinge's rates ω = (θ̇, φ̇) that only slows them: each moves
  * toward zero by at most its own size, never past it (see take_back_strand). */
 vec2 slowing_part(const vec2 &omega, const vec2 &delta)
@@ -605,7 +610,18 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
    * strands pushed by hair–hair collision every substep gained energy until they ran away
    * (9–13 of 24–28 limp strands over 40 frames of the two-sheet scene). Slowing-only changes
    * take energy out of eq. 1's oscillators and never put it in. The positions a pass gives
-   * come back whole, so a pass still moves a strand. */
+   * come back whole, so a pass still moves a strand.
+   *
+   * The articulated model takes the changes whole, but never with more kinetic energy (relative
+   * to the head) than the strand had before the passes or than the passes left it: imposing a
+   * node's velocity on an inextensible chain moves every node below it that the chain's shape
+   * couples to it (a zigzag strand whose node is pushed sideways translates its whole tip), and
+   * the same rates on a shape the passes moved are other node velocities (a φ̇ near the chart's
+   * pole, large for a slow node, is fast once a push turns the hinge away from the pole). Either
+   * can give the strand more energy than any pass did: hair–hair collision every substep then
+   * ran strands away, in wind at many substeps (298 of 300 at 5 m/s and 200 substeps). Where
+   * the taken-back rates carry more energy, they are scaled down to it: an impulse on a chain
+   * never raises its energy above what imposing the pass's node velocities would. */
   const IndexRange points = curve_points(curve_offsets_, curve);
   const size_t root = size_t(points.start);
   mat3 frame = substep.rotation * root_frames_head_[size_t(curve)];
@@ -615,9 +631,25 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
   bool moved = false;
   vec3 parent_delta_omega(0.0f); /* ΔΩ_{i-1}, rad/s */
   vec3 parent_delta_v(0.0f);     /* Δv̂_{i-1}, m/s */
+  /* The energy cap (articulated model): Σ d_i |v_i − v_head(x_i)|² before the passes, as they
+   * left the nodes, and of the rates taken back, whose node velocities relative to the head
+   * (relative_v, with relative_omega the rates' part of Ω_i) are linear in the rates. */
+  const bool capped = params_.model != StrandModel::Kurihara1993;
+  const auto relative = [&](const vec3 &v, const vec3 &x) {
+    return v - substep.head_velocity.of_point(x - substep.pose.translation);
+  };
+  float energy_before = 0.0f, energy_passes = 0.0f, energy_after = 0.0f;
+  vec3 relative_omega(0.0f), relative_v(0.0f);
+  bool changed = false;
   for (size_t i = root + 1; i < size_t(points.one_after_last()); i++) {
     const float d = rest_lengths_[i];
     const mat3 chart = frame * rest_rotations_[i];
+    if (capped) {
+      const vec3 before = relative(velocities_before_[i], positions_before_[i]);
+      const vec3 passes = relative(velocities_wo_[i], positions_wo_[i]);
+      energy_before += d * glm::dot(before, before);
+      energy_passes += d * glm::dot(passes, passes);
+    }
     moved = moved || positions_wo_[i] != positions_before_[i];
     if (moved) {
       const vec3 along = positions_wo_[i] - node;
@@ -632,19 +664,25 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
     if (delta_v != carried) {
       const vec3 own = (delta_v - carried) / d;
       /* Δφ̇ = (own · e_φ) / cos θ (cos θ < 0 for a hinge turned past the chart's pole); at
-       * the pole φ is undefined and takes nothing. */
+       * the pole φ is undefined and takes nothing. The articulated model's rods have their
+       * transverse inertia about their own axis too (strand_dynamics_articulated.cpp), so
+       * there φ̇ costs as much energy whatever θ, while it moves the node only cos θ as fast:
+       * its rate is the least-squares one with that twist charged, (own · e_φ) c / (c² + κ),
+       * nearly exact off the pole (within 1% while |c| > 0.7) and bounded at it. */
       const float c = deflection.cos_theta;
       const bool off_pole = std::abs(c) > 1e-3f;
-      float along_phi = off_pole ? glm::dot(own, frame[1]) : 0.0f;
-      vec2 delta_rate(glm::dot(own, frame[0]), off_pole ? along_phi / c : 0.0f);
+      const float kappa = capped ? pole_twist_weight : 0.0f;
+      vec2 delta_rate(glm::dot(own, frame[0]),
+                      off_pole ? glm::dot(own, frame[1]) * c / (c * c + kappa) : 0.0f);
       if (params_.model == StrandModel::Kurihara1993) {
         delta_rate = slowing_part(angular_velocities_[i], delta_rate);
-        along_phi = c * delta_rate.y;
       }
+      const float along_phi = c * delta_rate.y;
       angular_velocities_[i] += delta_rate;
       accelerations_known_[size_t(curve)] = 0; /* a pass's change: no trend of the steps */
       parent_delta_omega += delta_rate.x * frame[1] - delta_rate.y * chart[0];
       parent_delta_v = carried + d * (delta_rate.x * frame[0] + along_phi * frame[1]);
+      changed = true;
     }
     else {
       parent_delta_v = carried;
@@ -653,6 +691,20 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
       positions_wo_[i] = node + d * frame[2];
     }
     node = positions_wo_[i];
+    if (capped) { /* as place_curve moves the nodes, without the head's part */
+      const vec2 rate = angular_velocities_[i];
+      relative_omega += rate.x * frame[1] - rate.y * chart[0];
+      relative_v += d * glm::cross(relative_omega, frame[2]);
+      energy_after += d * glm::dot(relative_v, relative_v);
+    }
+  }
+  const float allowed = std::max(energy_before, energy_passes);
+  if (capped && (moved || changed) && energy_after > allowed) {
+    const float scale = std::sqrt(allowed / energy_after);
+    for (size_t i = root + 1; i < size_t(points.one_after_last()); i++) {
+      angular_velocities_[i] *= scale;
+    }
+    accelerations_known_[size_t(curve)] = 0;
   }
 }
 
