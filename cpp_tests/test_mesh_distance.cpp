@@ -213,3 +213,33 @@ TEST(MeshDistance, RepeatedDepthsSkipOnlyPointsThatStayedOut)
   }
   EXPECT_GT(inside_num, 1000) << "the cloud must reach into the sphere";
 }
+
+/* A segment's samples deeper than a tolerance, found with the queries the Lipschitz bound
+ * leaves (deeper_on_segment), give each sample's own answer: 20,000 random segments of up to
+ * 1 m through and around a sphere of 1 m, 1 to 64 samples, tolerances 0 to 0.2 m. */
+TEST(MeshDistance, DeeperOnASegmentAsEverySampleSays)
+{
+  const TestMesh m = uv_sphere(1.0f, 48, 24);
+  const MeshDistance distance(m.vertices, m.triangles);
+  std::mt19937 rng(8);
+  std::normal_distribution<float> gauss;
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  int64_t deeper_num = 0, shallow_inside_num = 0;
+  for (int i = 0; i < 20000; i++) {
+    const vec3 a = 1.1f * vec3(gauss(rng), gauss(rng), gauss(rng));
+    const vec3 b = a + 0.5f * unit(rng) * glm::normalize(vec3(gauss(rng), gauss(rng), gauss(rng)));
+    const int samples = 1 + int(63.0f * unit(rng));
+    const float tolerance = 0.2f * unit(rng) * unit(rng);
+    bool expected = false, inside = false;
+    for (int j = 0; j <= samples; j++) {
+      const float depth = distance.depth(glm::mix(a, b, float(j) / float(samples)));
+      expected = expected || depth > tolerance;
+      inside = inside || depth > 0.0f;
+    }
+    ASSERT_EQ(distance.deeper_on_segment(a, b, samples, tolerance), expected) << "segment " << i;
+    deeper_num += expected;
+    shallow_inside_num += inside && !expected;
+  }
+  EXPECT_GT(deeper_num, 2000);
+  EXPECT_GT(shallow_inside_num, 200) << "segments inside by less than the tolerance must occur";
+}

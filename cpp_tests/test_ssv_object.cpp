@@ -4,6 +4,7 @@
  * lengths, stops the velocity into the body and applies friction. */
 #include <gtest/gtest.h>
 
+#include <array>
 #include <memory>
 #include <random>
 #include <set>
@@ -60,30 +61,40 @@ TEST(SsvObject, HierarchyReturnsTheBruteForceTriangles)
   const SsvBVH bvh(sphere.vertices, sphere.triangles);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-0.15f, 0.15f);
-  int64_t found_total = 0;
-  for (int q = 0; q < 300; q++) {
+  int64_t found_total = 0, strip_found_total = 0;
+  for (int q = 0; q < 900; q++) {
     const vec3 a(u(rng), u(rng), u(rng));
     const vec3 b = a + 0.2f * vec3(u(rng), u(rng), u(rng));
-    const float reach = 0.01f;
+    const float reach = std::array<float, 3>{0.0005f, 0.01f, 0.05f}[size_t(q % 3)];
+    /* Every other query a strip's rectangle: the segment widened by a side across it. */
+    const vec3 across = glm::cross(b - a, vec3(u(rng), u(rng), u(rng)));
+    const vec3 side = q % 2 && glm::length(across) > 0.0f ?
+                          0.03f * glm::normalize(across) :
+                          vec3(0.0f);
     std::vector<TriangleContact> contacts;
-    bvh.segment_contacts(a, b, reach, contacts);
+    bvh.segment_contacts(a, b, reach, contacts, side);
     std::set<int32_t> found, reference;
     for (const TriangleContact &c : contacts) {
       found.insert(c.triangle);
     }
     for (size_t t = 0; t < sphere.triangles.size(); t++) {
       const ivec3 tri = sphere.triangles[t];
-      if (segment_triangle_distance(a, b, sphere.vertices[tri.x], sphere.vertices[tri.y],
-                                    sphere.vertices[tri.z])
-              .distance <= reach)
-      {
+      const vec3 &c0 = sphere.vertices[tri.x], &c1 = sphere.vertices[tri.y],
+                 &c2 = sphere.vertices[tri.z];
+      const float distance =
+          side != vec3(0.0f) ?
+              rectangle_triangle_distance({a - side, b - a, 2.0f * side, 0.0f}, c0, c1, c2)
+                  .distance :
+              segment_triangle_distance(a, b, c0, c1, c2).distance;
+      if (distance <= reach) {
         reference.insert(int32_t(t));
       }
     }
-    EXPECT_EQ(found, reference);
-    found_total += int64_t(found.size());
+    EXPECT_EQ(found, reference) << "query " << q;
+    (side != vec3(0.0f) ? strip_found_total : found_total) += int64_t(found.size());
   }
   EXPECT_GT(found_total, 300);
+  EXPECT_GT(strip_found_total, 300);
 }
 
 TEST(SsvObject, SegmentThroughAThinBladeIsLiftedOutWholeKeepingItsLength)

@@ -98,6 +98,30 @@ float MeshDistance::depth(const vec3 &p) const
   return std::max(-signed_distance(p), 0.0f);
 }
 
+bool MeshDistance::deeper_on_segment(const vec3 &a, const vec3 &b, const int samples,
+                                     const float tolerance) const
+{
+  const vec3 lo = bvh_.bounds_min(), hi = bvh_.bounds_max();
+  const float slack = 1e-5f * glm::length(hi - lo); /* as accumulate_depths */
+  const float spacing = glm::length(b - a) / float(std::max(samples, 1));
+  for (int j = 0; j <= samples;) {
+    const vec3 p = glm::mix(a, b, float(j) / float(std::max(samples, 1)));
+    const bool outside_box = p.x < lo.x || p.y < lo.y || p.z < lo.z || p.x > hi.x ||
+                             p.y > hi.y || p.z > hi.z;
+    /* Outside the bounding box the distance to the box bounds the distance to the mesh. */
+    const float distance = outside_box ?
+                               glm::length(glm::max(glm::max(lo - p, p - hi), vec3(0.0f))) :
+                               signed_distance(p);
+    if (!outside_box && -distance > tolerance) {
+      return true;
+    }
+    const float reach = distance + tolerance - slack;
+    j += 1 + (reach > 0.0f && spacing > 0.0f ? int(std::min(reach / spacing, float(samples))) :
+                                                0);
+  }
+  return false;
+}
+
 void MeshDistance::accumulate_depths(const mat4 &world_to_object, const float scale,
                                      const Span<vec3> points_wo,
                                      const MutableSpan<float> r_depth) const

@@ -25,6 +25,11 @@ class MeshDistance {
   float signed_distance(const vec3 &p) const;
   /* Depth inside the mesh (> 0), or 0 outside; cheap for points outside the bounding box. */
   float depth(const vec3 &p) const;
+  /* Whether depth() exceeds `tolerance` at any of the samples + 1 evenly spaced points from a
+   * to b (both ends included). The signed distance is 1-Lipschitz, so the points within
+   * (signed distance + tolerance) of a sample are no deeper than the tolerance and are not
+   * queried: the same answer as each point's depth() for a few queries a segment. */
+  bool deeper_on_segment(const vec3 &a, const vec3 &b, int samples, float tolerance) const;
   /* r_depth[i] = max(r_depth[i], depth(world_to_object · points_wo[i]) · scale). Each call
    * remembers, per index, a point and a lower bound of its signed distance; the signed
    * distance is 1-Lipschitz (|S(p) − S(q)| ≤ |p − q|), so a point that cannot have reached the

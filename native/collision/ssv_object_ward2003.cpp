@@ -65,7 +65,11 @@ void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_dist
   const float axis_sq = glm::dot(axis, axis);
   /* The SSV of the query against each node's PSS (§5.4: "recursively traversing the BVH
    * testing the hair's SSV against the bounding volumes"); a rectangle lies within its half
-   * width of its segment. */
+   * width of its segment. The core's box grown by max_distance (and a rounding margin): a
+   * triangle whose box it misses is out of reach. */
+  const vec3 grow(max_distance * 1.0001f + glm::length(glm::abs(a) + glm::abs(b)) * 1e-6f);
+  const vec3 low = glm::min(a, b) - glm::abs(side) - grow;
+  const vec3 high = glm::max(a, b) + glm::abs(side) + grow;
   PendingNodes pending;
   while (!pending.empty()) {
     const int32_t node_index = pending.pop();
@@ -83,6 +87,24 @@ void SsvBVH::segment_contacts(const vec3 &a, const vec3 &b, const float max_dist
     for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
       const int32_t t = leaf_triangles_[size_t(i)];
       const vec3 *c = corners(t);
+      if (glm::any(glm::lessThan(glm::max(glm::max(c[0], c[1]), c[2]), low)) ||
+          glm::any(glm::greaterThan(glm::min(glm::min(c[0], c[1]), c[2]), high)))
+      {
+        continue;
+      }
+      /* The triangle's plane bounds its distance from below: a core whose every point lies
+       * farther than max_distance on one side of it is out of reach (most triangles of a
+       * leaf), without the exact distance. The margin covers float rounding. */
+      const vec3 &n = normal(t);
+      if (n != vec3(0.0f)) {
+        const float da = glm::dot(a - c[0], n), db = glm::dot(b - c[0], n);
+        const float widen = strip ? std::abs(glm::dot(side, n)) : 0.0f;
+        const float reach = max_distance * 1.0001f + widen +
+                            1e-6f * (glm::length(a - c[0]) + glm::length(b - c[0]));
+        if (std::min(da, db) > reach || std::max(da, db) < -reach) {
+          continue;
+        }
+      }
       CoreDistance core;
       if (strip) {
         core = rectangle_triangle_distance({a - side, axis, 2.0f * side, 0.0f}, c[0], c[1], c[2]);
@@ -537,9 +559,7 @@ float segment_penetration_share(const Span<int32_t> curve_offsets, const Span<ve
           const float length = glm::length(b - a);
           const float spacing = std::max(0.25f * tolerance, length / float(max_segment_samples));
           const int samples = spacing > 0.0f ? 1 + int(std::ceil(length / spacing)) : 1;
-          for (int j = 0; j <= samples && !cuts; j++) {
-            cuts = collider.exact().depth(glm::mix(a, b, float(j) / float(samples))) > tolerance;
-          }
+          cuts = collider.exact().deeper_on_segment(a, b, samples, tolerance);
         }
         count += cuts ? 1.0 : 0.0;
       }
