@@ -120,11 +120,12 @@ TEST(LodHierarchy, MinimumGroupSizeStopsTheSplits)
 TEST(LodHierarchy, SkeletonsHaveTheirParentsPointCountAndStoredOffsets)
 {
   const CapGroom groom(200, 12);
-  for (const int32_t points : {0, 7}) {
+  for (const int32_t points : {0, 7, 1000}) {
     LodParams params = small_params();
     params.skeleton_points = points;
     const LodHierarchy hierarchy = build(groom, params);
-    const int32_t n = points == 0 ? 12 : points;
+    /* 0, or more than the strands' 12: theirs. */
+    const int32_t n = points == 0 || points > 12 ? 12 : points;
     ASSERT_EQ(hierarchy.skeleton_points_num(), n);
     for (int64_t node = 0; node < hierarchy.nodes_num(); node++) {
       ASSERT_EQ(hierarchy.rest_skeleton(node).size(), n);

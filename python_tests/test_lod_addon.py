@@ -90,6 +90,7 @@ def test_bake_keeps_the_topology_and_writes_lod_level(saved_fixture):
     settings.method = 'STRANDS'
     settings.strands.children_per_guide = 0
     settings.lod.enabled = True
+    settings.lod.skeleton_points = 1000  # more than the strands have: theirs
     assert bpy.ops.hairdyn.bake() == {'FINISHED'}
     from hairdyn.cache import Cache
 
@@ -107,6 +108,7 @@ def test_bake_keeps_the_topology_and_writes_lod_level(saved_fixture):
     output = settings.output_curves.data
     sizes = [len(curve.points) for curve in hair.data.curves]
     assert [len(curve.points) for curve in output.curves] == sizes
+    assert report["lod_skeleton_points"] == max(sizes)
     bpy.context.scene.frame_set(3)  # the bake plays back: frame 3's levels on the output
     shown = levels(hair)
     cached = cache.read_frame(3)["lod_level"]

@@ -349,7 +349,11 @@ LodHierarchy::LodHierarchy(const Span<int32_t> curve_offsets, const Span<vec3> r
   for (int64_t c = 0; c < curves; c++) {
     longest = std::max(longest, int32_t(curve_points(curve_offsets, c).size));
   }
-  skeleton_points_num_ = params.skeleton_points >= 2 ? params.skeleton_points : longest;
+  /* No more than the longest strand has: more control points add no shape the strands have,
+   * and the hair–hair pass's pairs grow with their square (a group's swept sphere is
+   * centimetres thick: 1,000 points on a 9-point groom took minutes a frame). */
+  skeleton_points_num_ = params.skeleton_points >= 2 ? std::min(params.skeleton_points, longest) :
+                                                       longest;
   const int32_t n = skeleton_points_num_;
 
   std::vector<vec3> resampled(static_cast<size_t>(curves * n));

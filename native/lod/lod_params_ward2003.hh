@@ -22,8 +22,8 @@ struct LodParams {
   /* Strand groups stop splitting at this many strands (§4.2, §7.2: some hierarchies end at
    * four or five strands); 1 goes down to single strands. */
   int32_t min_group_strands = 1;
-  /* Control points of every skeleton (§3, §4: each skeleton has its parent's count); 0 takes
-   * the groom's largest strand point count. */
+  /* Control points of every skeleton (§3, §4: each skeleton has its parent's count); 0, or
+   * more than the groom's largest strand point count, takes that count. */
   int32_t skeleton_points = 0;
   /* Deepest level the selection may use (§6.1); -1 means the deepest the hierarchy has. */
   int32_t finest_level = -1;
@@ -78,7 +78,8 @@ struct LodParams {
     fn(&LodParams::skeleton_points,
        ParamInfo{"skeleton_points", "n", "", 0.0, 1000.0,
                  "Control points of every skeleton, the same at every level (Ward & Lin 2003, "
-                 "§3, §4); 0 takes the groom's longest strand count"}
+                 "§3, §4); 0, or more than the groom's longest strand has, takes that strand's "
+                 "count"}
            .soft(0.0, 64.0));
     fn(&LodParams::finest_level,
        ParamInfo{"finest_level", "", "", -1.0, 64.0,

@@ -308,6 +308,7 @@ class LodStrands(Attached):
             },
             "lod_switches": int(self.switches),
             "lod_nodes": int(self.solver.nodes_num),
+            "lod_skeleton_points": int(self.solver.skeleton_points_num),
             "lod_strips": int(self.solver.top_nodes_num),
             "lod_coarsest_level": int(self.solver.coarsest_level),
             "lod_finest_level": int(self.solver.finest_level),
