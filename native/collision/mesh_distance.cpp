@@ -103,9 +103,10 @@ bool MeshDistance::deeper_on_segment(const vec3 &a, const vec3 &b, const int sam
 {
   const vec3 lo = bvh_.bounds_min(), hi = bvh_.bounds_max();
   const float slack = 1e-5f * glm::length(hi - lo); /* as accumulate_depths */
-  const float spacing = glm::length(b - a) / float(std::max(samples, 1));
+  const float steps = float(std::max(samples, 1));
+  const float spacing = glm::length(b - a) / steps;
   for (int j = 0; j <= samples;) {
-    const vec3 p = glm::mix(a, b, float(j) / float(std::max(samples, 1)));
+    const vec3 p = glm::mix(a, b, float(j) / steps);
     const bool outside_box = p.x < lo.x || p.y < lo.y || p.z < lo.z || p.x > hi.x ||
                              p.y > hi.y || p.z > hi.z;
     /* Outside the bounding box the distance to the box bounds the distance to the mesh. */

@@ -620,8 +620,7 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
    * pole, large for a slow node, is fast once a push turns the hinge away from the pole). Either
    * can give the strand more energy than any pass did: hair–hair collision every substep then
    * ran strands away, in wind at many substeps (298 of 300 at 5 m/s and 200 substeps). Where
-   * the taken-back rates carry more energy, they are scaled down to it: an impulse on a chain
-   * never raises its energy above what imposing the pass's node velocities would. */
+   * the taken-back rates carry more energy, all the strand's rates are scaled down to it. */
   const IndexRange points = curve_points(curve_offsets_, curve);
   const size_t root = size_t(points.start);
   mat3 frame = substep.rotation * root_frames_head_[size_t(curve)];
@@ -634,7 +633,7 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
   /* The energy cap (articulated model): Σ d_i |v_i − v_head(x_i)|² before the passes, as they
    * left the nodes, and of the rates taken back, whose node velocities relative to the head
    * (relative_v, with relative_omega the rates' part of Ω_i) are linear in the rates. */
-  const bool capped = params_.model != StrandModel::Kurihara1993;
+  const bool articulated = params_.model != StrandModel::Kurihara1993;
   const auto relative = [&](const vec3 &v, const vec3 &x) {
     return v - substep.head_velocity.of_point(x - substep.pose.translation);
   };
@@ -644,7 +643,7 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
   for (size_t i = root + 1; i < size_t(points.one_after_last()); i++) {
     const float d = rest_lengths_[i];
     const mat3 chart = frame * rest_rotations_[i];
-    if (capped) {
+    if (articulated) {
       const vec3 before = relative(velocities_before_[i], positions_before_[i]);
       const vec3 passes = relative(velocities_wo_[i], positions_wo_[i]);
       energy_before += d * glm::dot(before, before);
@@ -671,7 +670,7 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
        * nearly exact off the pole (within 1% while |c| > 0.7) and bounded at it. */
       const float c = deflection.cos_theta;
       const bool off_pole = std::abs(c) > 1e-3f;
-      const float kappa = capped ? pole_twist_weight : 0.0f;
+      const float kappa = articulated ? pole_twist_weight : 0.0f;
       vec2 delta_rate(glm::dot(own, frame[0]),
                       off_pole ? glm::dot(own, frame[1]) * c / (c * c + kappa) : 0.0f);
       if (params_.model == StrandModel::Kurihara1993) {
@@ -691,7 +690,7 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
       positions_wo_[i] = node + d * frame[2];
     }
     node = positions_wo_[i];
-    if (capped) { /* as place_curve moves the nodes, without the head's part */
+    if (articulated) { /* as place_curve moves the nodes, without the head's part */
       const vec2 rate = angular_velocities_[i];
       relative_omega += rate.x * frame[1] - rate.y * chart[0];
       relative_v += d * glm::cross(relative_omega, frame[2]);
@@ -699,7 +698,7 @@ void StrandSolver::take_back_strand(const int64_t curve, const Substep &substep)
     }
   }
   const float allowed = std::max(energy_before, energy_passes);
-  if (capped && (moved || changed) && energy_after > allowed) {
+  if (articulated && (moved || changed) && energy_after > allowed) {
     const float scale = std::sqrt(allowed / energy_after);
     for (size_t i = root + 1; i < size_t(points.one_after_last()); i++) {
       angular_velocities_[i] *= scale;
