@@ -4,6 +4,7 @@ Everything goes through foreach_get / foreach_set on numpy arrays: no per-point 
 Arrays handed to the native module are C-contiguous (N, 3) float32 / int32, so they cross
 the boundary without copies.
 """
+
 import sys
 from dataclasses import dataclass, field
 
@@ -82,8 +83,10 @@ class MeshData:
             to_next = v[t[:, (corner + 1) % 3]] - v[t[:, corner]]
             to_previous = v[t[:, (corner + 2) % 3]] - v[t[:, corner]]
             across = np.cross(to_next, to_previous)
-            angle = np.arctan2(np.sqrt(np.einsum("ij,ij->i", across, across)),
-                               np.einsum("ij,ij->i", to_next, to_previous))
+            angle = np.arctan2(
+                np.sqrt(np.einsum("ij,ij->i", across, across)),
+                np.einsum("ij,ij->i", to_next, to_previous),
+            )
             np.add.at(normals, t[:, corner], angle[:, None] * face)  # in order: deterministic
         lengths = np.sqrt(np.einsum("ij,ij->i", normals, normals))[:, None]
         loose = lengths[:, 0] == 0.0
@@ -167,8 +170,12 @@ def read_curves(obj, depsgraph):
     # UVs as the artist authored them (the original ID: evaluated attributes may be
     # read-only views that Blender refuses to hand out).
     attribute = obj.data.attributes.get(SURFACE_UV_ATTRIBUTE)
-    if (attribute is not None and attribute.domain == 'CURVE' and attribute.data_type == 'FLOAT2'
-            and len(attribute.data) == len(curve_offsets) - 1):
+    if (
+        attribute is not None
+        and attribute.domain == 'CURVE'
+        and attribute.data_type == 'FLOAT2'
+        and len(attribute.data) == len(curve_offsets) - 1
+    ):
         root_uvs = np.empty((len(curve_offsets) - 1, 2), dtype=np.float32)
         attribute.data.foreach_get("vector", root_uvs.ravel())
     matrix_world = matrix_array(evaluated.matrix_world)
@@ -193,8 +200,10 @@ def read_radii(obj, points_num, matrix_world):
     if radii is None:
         return None, []
     if not (np.isfinite(radii).all() and (radii >= 0.0).all()):
-        message = (f"the radius attribute of '{obj.name}' has values that are negative or not "
-                   "numbers; the swept spheres' Strand Thickness stands for it")
+        message = (
+            f"the radius attribute of '{obj.name}' has values that are negative or not "
+            "numbers; the swept spheres' Strand Thickness stands for it"
+        )
         print(f"hairdyn: warning: {message}", file=sys.stderr)
         return None, [message]
     scale = abs(float(np.linalg.det(matrix_world[:3, :3]))) ** (1.0 / 3.0)
@@ -214,8 +223,12 @@ def _point_values(obj, name, data_type, points_num, dtype):
     has none of that kind and count. The original ID's: evaluated attributes may be read-only
     views that Blender refuses to hand out."""
     attribute = obj.data.attributes.get(name)
-    if (attribute is None or attribute.domain != 'POINT' or attribute.data_type != data_type
-            or len(attribute.data) != points_num):
+    if (
+        attribute is None
+        or attribute.domain != 'POINT'
+        or attribute.data_type != data_type
+        or len(attribute.data) != points_num
+    ):
         return None
     values = np.empty(points_num, dtype=dtype)
     attribute.data.foreach_get("value", values)
@@ -246,8 +259,9 @@ def read_particle_hair(obj, depsgraph):
         settings.use_parent_particles = True
         obj.particle_systems.active_index = list(obj.particle_systems).index(psys)
         depsgraph.update()
-        with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj],
-                                       selected_editable_objects=[obj]):
+        with bpy.context.temp_override(
+            object=obj, active_object=obj, selected_objects=[obj], selected_editable_objects=[obj]
+        ):
             bpy.ops.curves.convert_from_particle_system()
         created = [o for o in bpy.data.objects if o not in before]
         if len(created) != 1 or created[0].type != 'CURVES':
@@ -265,8 +279,8 @@ def read_particle_hair(obj, depsgraph):
         obj.particle_systems.active_index = active_index
         depsgraph.update()
 
-    curve_offsets = np.ascontiguousarray(curve_offsets[:parents_num + 1])
-    positions = positions[:curve_offsets[-1]]
+    curve_offsets = np.ascontiguousarray(curve_offsets[: parents_num + 1])
+    positions = positions[: curve_offsets[-1]]
     return Groom(
         positions_wo=to_world(matrix_world, positions),
         curve_offsets=curve_offsets,
@@ -285,8 +299,9 @@ def read_groom(obj, depsgraph):
     elif hair_particle_system(obj) is not None:
         groom = read_particle_hair(obj, depsgraph)
     else:
-        raise HairdynError(f"'{obj.name}' is not hair: use a Curves object or a mesh with a "
-                           "hair particle system")
+        raise HairdynError(
+            f"'{obj.name}' is not hair: use a Curves object or a mesh with a hair particle system"
+        )
     return drop_degenerate_strands(groom, obj.name)
 
 
@@ -298,8 +313,10 @@ def degenerate_strand_mask(curve_offsets, positions):
 
     module = native.load()
     try:
-        return module.degenerate_strands(np.ascontiguousarray(curve_offsets, dtype=np.int32),
-                                         np.ascontiguousarray(positions, dtype=np.float32))
+        return module.degenerate_strands(
+            np.ascontiguousarray(curve_offsets, dtype=np.int32),
+            np.ascontiguousarray(positions, dtype=np.float32),
+        )
     except ValueError:
         return None
 
@@ -320,17 +337,23 @@ def drop_degenerate_strands(groom, name):
         return groom
     count = int(degenerate.sum())
     if count == len(degenerate):
-        raise HairdynError(f"Every strand of '{name}' ({count}) has a zero-length segment "
-                           "(shorter than a millionth of the groom's size)")
+        raise HairdynError(
+            f"Every strand of '{name}' ({count}) has a zero-length segment "
+            "(shorter than a millionth of the groom's size)"
+        )
     offsets, points = keep_strands(groom.curve_offsets, ~degenerate)
-    message = (f"{count} of the {len(degenerate)} strands of '{name}' have a zero-length "
-               "segment (shorter than a millionth of the groom's size) and were left out")
+    message = (
+        f"{count} of the {len(degenerate)} strands of '{name}' have a zero-length "
+        "segment (shorter than a millionth of the groom's size) and were left out"
+    )
     print(f"hairdyn: warning: {message}", file=sys.stderr)
     return Groom(
         positions_wo=np.ascontiguousarray(groom.positions_wo[points]),
         curve_offsets=offsets,
         surface=groom.surface,
-        root_uvs=None if groom.root_uvs is None else np.ascontiguousarray(groom.root_uvs[~degenerate]),
+        root_uvs=None
+        if groom.root_uvs is None
+        else np.ascontiguousarray(groom.root_uvs[~degenerate]),
         warnings=groom.warnings + [message],
         fixed=None if groom.fixed is None else np.ascontiguousarray(groom.fixed[points]),
         radii=None if groom.radii is None else np.ascontiguousarray(groom.radii[points]),
@@ -360,10 +383,12 @@ def read_mesh(obj, depsgraph):
     finally:
         evaluated.to_mesh_clear()
     if len(vertices) == 0:
-        raise HairdynError(f"The mesh '{obj.name}' has no vertices: a head or collider needs "
-                           "a mesh with faces")
-    return MeshData(obj.name, vertices, normals, triangles, triangle_faces,
-                    matrix_array(evaluated.matrix_world))
+        raise HairdynError(
+            f"The mesh '{obj.name}' has no vertices: a head or collider needs a mesh with faces"
+        )
+    return MeshData(
+        obj.name, vertices, normals, triangles, triangle_faces, matrix_array(evaluated.matrix_world)
+    )
 
 
 def vertex_group_weights(obj, names, vertices_num):
@@ -384,8 +409,10 @@ def vertex_group_weights(obj, names, vertices_num):
 
 def vertex_group_members(obj, names, vertices_num):
     """{group name: int32 vertex indices with weight > 0.5} for the named groups obj has."""
-    return {name: np.flatnonzero(weights > 0.5).astype(np.int32)
-            for name, weights in vertex_group_weights(obj, names, vertices_num).items()}
+    return {
+        name: np.flatnonzero(weights > 0.5).astype(np.int32)
+        for name, weights in vertex_group_weights(obj, names, vertices_num).items()
+    }
 
 
 def selected_faces(obj):
@@ -511,8 +538,9 @@ def write_curves(obj, positions_wo):
     """Positions (N, 3) float32 into a Curves object of the same point count."""
     curves = obj.data
     if len(curves.points) != len(positions_wo):
-        raise HairdynError(f"'{obj.name}' has {len(curves.points)} points, the simulation "
-                           f"{len(positions_wo)}")
+        raise HairdynError(
+            f"'{obj.name}' has {len(curves.points)} points, the simulation {len(positions_wo)}"
+        )
     curves.position_data.foreach_set("vector", np.ascontiguousarray(positions_wo).ravel())
     _tag_positions_changed(curves)
     curves.update_tag()
