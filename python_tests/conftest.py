@@ -38,9 +38,10 @@ def shown(struct_name, field_name, si_value):
     return si_value * next(f for f in fields if f["name"] == field_name)["display_scale"]
 
 
-def scale_radius_attribute(hair, scale, negative_row=None):
+def scale_radius_attribute(hair, scale, broken=None):
     """The Curves object's point attribute "radius" times `scale`, or removed when scale is
-    None; with negative_row, that point's radius made -1 first (a broken attribute)."""
+    None; with broken = (row, value), that point's radius made `value` first (a broken
+    attribute)."""
     import numpy as np
 
     radius = hair.data.attributes["radius"]
@@ -49,8 +50,8 @@ def scale_radius_attribute(hair, scale, negative_row=None):
         return
     values = np.empty(len(radius.data), dtype=np.float32)
     radius.data.foreach_get("value", values)
-    if negative_row is not None:
-        values[negative_row] = -1.0
+    if broken is not None:
+        values[broken[0]] = broken[1]
     radius.data.foreach_set("value", values * np.float32(scale))
 
 

@@ -60,12 +60,13 @@ def test_report_tolerance_at_its_panel_minimum_counts_any_depth(open_fixture):
 def test_the_curves_radius_attribute_sizes_the_swept_spheres(open_fixture):
     """Each strand's swept spheres take its Curves radius attribute (in world meters, the
     object's scale applied); Strand Thickness stands in where there is none, or where the
-    attribute holds a negative value (with a warning in the report)."""
+    attribute holds a negative value or one thicker than Strand Thickness may be (with a
+    warning in the report)."""
 
-    def run_with(scale=None, broken=False):
+    def run_with(scale=None, broken=None):
         open_fixture("head_shake.blend")
         hair = bpy.data.objects["Hair"]
-        scale_radius_attribute(hair, scale, negative_row=5 if broken else None)
+        scale_radius_attribute(hair, scale, broken)
         cli.apply_settings(
             hair.hairdyn,
             [
@@ -82,6 +83,7 @@ def test_the_curves_radius_attribute_sizes_the_swept_spheres(open_fixture):
     # grow with the radii.
     assert thin["hair_hair_pairs"] < none["hair_hair_pairs"] < thick["hair_hair_pairs"]
     assert thin["crossings"] < thick["crossings"]
-    broken = run_with(1.0, broken=True)
-    assert broken["hair_hair_pairs"] == none["hair_hair_pairs"]
-    assert any("radius attribute" in w for w in broken["groom_warnings"])
+    for value in (-1.0, 1e30):  # 1e30 m: every pair would be pushed kilometres apart
+        broken = run_with(1.0, broken=(5, value))
+        assert broken["hair_hair_pairs"] == none["hair_hair_pairs"]
+        assert any("radius attribute" in w for w in broken["groom_warnings"])

@@ -195,19 +195,28 @@ def read_radii(obj, points_num, matrix_world):
     """((N,) float32 radii in world meters, [warning]) from the FLOAT point attribute
     "radius" of a Curves object (scaled by the object's mean scale), or (None, []) when it has
     none, or one for other points than the evaluated ones; (None, [sentence]) when a value is
-    negative or not a number."""
+    negative, not a number, or thicker than the swept spheres' Strand Thickness may be (it
+    stands for the attribute: every pair of segments would overlap)."""
+    from . import native
+
     radii = _point_values(obj, "radius", 'FLOAT', points_num, np.float32)
     if radii is None:
         return None, []
-    if not (np.isfinite(radii).all() and (radii >= 0.0).all()):
+    scale = abs(float(np.linalg.det(matrix_world[:3, :3]))) ** (1.0 / 3.0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        radii = (radii * np.float32(scale)).astype(np.float32)
+    (thickness,) = (f for f in native.load().SweptSphereParams.fields() if f["name"] == "thickness")
+    if not (
+        np.isfinite(radii).all() and (radii >= 0.0).all() and (radii <= thickness["max"]).all()
+    ):
         message = (
-            f"the radius attribute of '{obj.name}' has values that are negative or not "
-            "numbers; the swept spheres' Strand Thickness stands for it"
+            f"the radius attribute of '{obj.name}' has values that are negative, not "
+            f"numbers or over {1e3 * thickness['max']:g} mm; the swept spheres' Strand "
+            "Thickness stands for it"
         )
         print(f"hairdyn: warning: {message}", file=sys.stderr)
         return None, [message]
-    scale = abs(float(np.linalg.det(matrix_world[:3, :3]))) ** (1.0 / 3.0)
-    return (radii * np.float32(scale)).astype(np.float32), []
+    return radii, []
 
 
 def read_fixed(obj, points_num):
