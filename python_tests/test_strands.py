@@ -220,11 +220,13 @@ def test_a_run_switches_the_particle_hair_off_while_it_steps(open_fixture, monke
 
 @pytest.mark.parametrize("integrator", ['IMPLICIT', 'EXPLICIT'])
 def test_a_diverged_run_says_what_to_change(open_fixture, integrator):
-    """The wind at the panel's top speed (100 m/s), 4 substeps: the gale whips the thin hair
-    faster than its steps follow. The run stops with a sentence whose advice fits the settings: the implicit
-    integrator is suggested only where it is not already in use."""
+    """The wind at the panel's top speed (100 m/s) at one substep a frame: the gale asks for
+    steps shorter than a substep may be cut into (at four substeps the hair holds). The run
+    stops with a sentence whose advice fits the settings: the implicit integrator is suggested
+    only where it is not already in use."""
     hair = strands_on(open_fixture, "head_shake.blend")
     hair.hairdyn.strands.integrator = integrator
+    hair.hairdyn.strands.substeps = 1
     wind = hair.hairdyn.wind
     wind.speed = wind.bl_rna.properties["speed"].hard_max
     with pytest.raises(HairdynError, match="diverged") as failure:

@@ -41,6 +41,20 @@
  * strand ran away. A chain hung in a steady wind settles at the angle its forces give on any
  * substep (test AChainInASteadyWindHangsAtTheAngleItsForcesGive).
  *
+ * Tension stiffens the chain, and the step takes that stiffness explicitly: the external
+ * force beyond a hinge that pulls along its segment, T (the drag of the air streaming past a
+ * hair, its weight, the head's spin), holds a rod turning about its centre as a spring would,
+ * with T d of torque per radian (T at both ends): the chain's zigzag mode, ω² = T d / I, I
+ * the rod's inertia about its centre, (m + drag armature) d² / 12, plus h² k, the implicit
+ * hinge spring's armature. Semi-implicit Euler keeps that mode bounded only while ω h < 2
+ * (max_wave_phase), and the air's pull on a hair is large: 20 times its weight at 5 m/s. At
+ * four substeps a frame the hinges zigzagged without end at any wind over 2 m/s (3 mm a
+ * frame of jitter on head_shake.blend's hair at 5 m/s, head still), and gales from 60 m/s ran
+ * strands away (tests StrandsInASteadyBreezeComeToRest, NoStrandRunsAwayInAGaleFromRest). A
+ * strand whose mode is faster cuts its step as a fast-turning one does (steps_needed). A
+ * hanging strand's weight asks for no cut at four substeps: the hinge springs' armature
+ * outweighs a short rod's inertia.
+ *
  * Gravity, drag, head forces and the velocity products are explicit, taken at the middle of
  * the step (explicit midpoint): at the rates q̇ + h q̈₀ / 2, with q̈₀ the chain's acceleration
  * at the step's start. Taken at q̇ (explicit Euler), they let a tumbling chain gain energy
@@ -550,8 +564,14 @@ template<int W>
     float h[group_strands_max];
     for (int64_t j = 0; j < active_num; j++) {
       const int64_t k = active[j];
-      /* The last step takes what remains (rounding leaves no sliver of a step). */
-      h[j] = remaining[k] <= 1.001f * step_h[k] ? remaining[k] : step_h[k];
+      /* What remains in equal steps of at most the step (a thousandth over it allowed for
+       * rounding), the last taking exactly what remains. Steps of step_h with the remainder
+       * last left a sliver where the rounding of hundreds of steps added up (3e-8 s after 350
+       * steps of 3e-5 s), and the steps after it extrapolated the sliver's acceleration (see
+       * the top): a strand pressed on the head by a 40 m/s wind turned a hinge from 380 to
+       * 9,700 rad/s in the next step and ran away. */
+      const float steps = std::ceil(remaining[k] / step_h[k] - 0.001f);
+      h[j] = steps <= 1.0f ? remaining[k] : remaining[k] / steps;
       step_h[k] = h[j];
       step_curves[j] = curves[k];
       may_split[j] = h[j] > shortest * 1.5f;
@@ -763,8 +783,21 @@ template<int W>
     parent_omega = omega;
     arm = d * t;
   }
+  /* The tension's zigzag mode (see the top of the file): ω² = T d / I at each rod, T the
+   * external force beyond its hinge along it (none if it pushes), reported as the turn rate
+   * that asks for as many steps (wave_turn_scale). */
+  V3<Floats> distal{};
+  Floats fastest_wave2{};
+  for (size_t i = n; i-- > 0;) {
+    const ArticulatedTerms<W> &x = terms[i];
+    distal = distal + x.force;
+    const Floats tension = chain::max(dot(distal, x.t), Floats{});
+    const Floats inertia = (x.m + x.drag_mass) * (x.d * x.d) * (1.0f / 12.0f) + (h * h) * x.k;
+    fastest_wave2 = chain::max(fastest_wave2, (tension * x.d) / inertia);
+  }
   for (int lane = 0; lane < W; lane++) {
-    r_fastest_turn[lane] = std::sqrt(fastest_turn2[lane]);
+    r_fastest_turn[lane] = std::max(std::sqrt(fastest_turn2[lane]),
+                                    std::sqrt(fastest_wave2[lane]) * wave_turn_scale);
   }
 }
 

@@ -260,6 +260,12 @@ class StrandSolver {
    * order) 0.3 keeps every test and the soak (a third of the steps: BM_StrandStep's
    * articulated frame 697 -> 320 ms on one core). */
   static constexpr float max_turn_per_step = 0.3f;
+  /* rad: the most the chain's tension-stiffened zigzag mode may advance its phase in one step
+   * of the articulated model, ω h (strand_dynamics_articulated.cpp, at the top; semi-implicit
+   * Euler keeps the mode bounded below 2). A strand whose mode is faster cuts its steps as
+   * one that turns fast does, the mode's ω counting as a turn rate of ω wave_turn_scale. */
+  static constexpr float max_wave_phase = 2.0f;
+  static constexpr float wave_turn_scale = max_turn_per_step / max_wave_phase;
   /* rad: the most of a contact projection's turn that the projected segment's child takes back
    * in its hinge, keeping its direction (articulated model; the rest it turns with the
    * segment). A strand resting on a body is projected by small turns, 99% of them under
