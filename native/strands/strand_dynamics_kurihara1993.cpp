@@ -12,6 +12,37 @@
 
 namespace hairdyn {
 
+/* The torque of a force F at the centre turns with the segment: turned by dθ, u F·e_θ changes
+ * by −u F·t dθ, and u cos θ F·e_φ by −u F·(t − sin θ x) dφ (x the chart's pole), where t is
+ * the segment's direction: a pull along the segment holds it as a spring of stiffness
+ * u F·t, u F·(t − sin θ x) would (a pendulum in the air's stream). Eq. 5 takes the torque
+ * explicitly, and in a wind of 10 m/s the air's pull on the default hair, 120 times its
+ * weight, makes that spring stiff enough that four substeps a frame feed its swing (ω h ≈
+ * 2.2 on head_shake.blend's 2.75 cm segments, against the hinge's inertia with the spring's
+ * armature): that hair, head still, thrashed at 1.3 m/s. The
+ * implicit integrator takes the part of that stiffness that explicit steps cannot hold
+ * (beyond ω h = 1 against the hinge's inertia) linearly implicit, as it takes the spring
+ * (hinge_integration.hh): the hinge's step as for a spring stiffer by that part. The pull of
+ * a hanging segment's weight asks for none at four substeps. */
+HingeStep<vec2> StrandSolver::pulled_hinge_step(const size_t i, const float h, const vec2 &k,
+                                                const vec3 &force, const vec3 &t,
+                                                const vec3 &phi_pull) const
+{
+  const HingeStep<vec2> &step = hinge_steps_[i];
+  if (params_.integrator != Integrator::Implicit) {
+    return step;
+  }
+  const float u = 0.5f * rest_lengths_[i];
+  const vec2 pull = glm::max(u * vec2(glm::dot(force, t), glm::dot(force, phi_pull)), vec2(0.0f));
+  /* What explicit steps hold: ω h = 1 against the step's inertia, 1 / gain. */
+  const vec2 excess = glm::max(pull - 1.0f / (h * h * step.gain), vec2(0.0f));
+  if (excess.x == 0.0f && excess.y == 0.0f) {
+    return step;
+  }
+  return hinge_step(params_.integrator, moment_of_inertia(int64_t(i)), k + excess,
+                    params_.damping, h);
+}
+
 bool StrandSolver::advance_kurihara(const IndexRange points, const Substep &substep, mat3 frame,
                                     vec3 node_velocity, const vec3 &wind_wo, Counts &counts)
 {
@@ -46,7 +77,9 @@ bool StrandSolver::advance_kurihara(const IndexRange points, const Substep &subs
                       u * old_deflection.cos_theta * glm::dot(force, old_frame[1]));
 
     /* Kurihara 1993, eq. 1 and 4: explicit eq. 7 or Ward & Lin 2003, appendix A. */
-    advance_hinge(hinge_steps_[i], h, k, torque, angles, omega);
+    advance_hinge(pulled_hinge_step(i, h, k, force, old_frame[2],
+                                    old_frame[2] - old_deflection.sin_theta * chart[0]),
+                  h, k, torque, angles, omega);
     if (hinge_runs_away(omega, d)) {
       return false;
     }

@@ -340,6 +340,11 @@ class StrandSolver {
   /* The stepped strands in groups of one point count, up to group_strands_max each
    * (groups_). */
   void group_strands();
+  /* Hinge i's step (hinge_steps_[i]) with the stiffness of the pull `force` along t and
+   * phi_pull that explicit steps of h cannot hold taken implicitly (implicit integrator;
+   * strand_dynamics_kurihara1993.cpp). */
+  HingeStep<vec2> pulled_hinge_step(size_t i, float h, const vec2 &k, const vec3 &force,
+                                    const vec3 &t, const vec3 &phi_pull) const;
   /* Kurihara 1993 §2: each hinge alone (strand_dynamics_kurihara1993.cpp). */
   bool advance_kurihara(IndexRange points, const Substep &substep, mat3 frame,
                         vec3 node_velocity, const vec3 &wind_wo, Counts &counts);
