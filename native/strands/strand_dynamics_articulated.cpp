@@ -44,16 +44,18 @@
  * Tension stiffens the chain, and the step takes that stiffness explicitly: the external
  * force beyond a hinge that pulls along its segment, T (the drag of the air streaming past a
  * hair, its weight, the head's spin), holds a rod turning about its centre as a spring would,
- * with T d of torque per radian (T at both ends): the chain's zigzag mode, ω² = T d / I, I
- * the rod's inertia about its centre, (m + drag armature) d² / 12, plus h² k, the implicit
- * hinge spring's armature. Semi-implicit Euler keeps that mode bounded only while ω h < 2
- * (max_wave_phase), and the air's pull on a hair is large: 20 times its weight at 5 m/s. At
- * four substeps a frame the hinges zigzagged without end at any wind over 2 m/s (3 mm a
- * frame of jitter on head_shake.blend's hair at 5 m/s, head still), and gales from 60 m/s ran
- * strands away (tests StrandsInASteadyBreezeComeToRest, NoStrandRunsAwayInAGaleFromRest). A
- * strand whose mode is faster cuts its step as a fast-turning one does (steps_needed). A
- * hanging strand's weight asks for no cut at four substeps: the hinge springs' armature
- * outweighs a short rod's inertia.
+ * with T d of torque per radian (T at both ends): the chain's zigzag mode, ω² = T d / I, I the
+ * rod's inertia about its centre, (m + drag armature) d² / 12. With the hinge's spring k and
+ * damper γ implicit (their armature h γ + h² k in the step), semi-implicit Euler keeps the
+ * mode bounded while h² T d < 4 (I + h γ / 2 + h² k / 4) (Jury's test on the step's 2 × 2
+ * map): ω h < 2 (max_wave_phase) with I + h γ / 2 + h² k / 4 for I. The air's pull on a
+ * hair is large, 20 times its weight at 5 m/s, and at four substeps a frame the hinges
+ * zigzagged without end at any wind over 2 m/s (3 mm a frame of jitter on head_shake.blend's
+ * hair at 5 m/s, head still), and gales from 60 m/s ran strands away (tests
+ * StrandsInASteadyBreezeComeToRest, NoStrandRunsAwayInAGaleFromRest). A strand whose mode is
+ * faster cuts its step as a fast-turning one does (steps_needed): about three steps a
+ * substep for 30 cm strands of 16 segments in a 2 m/s wind. A hanging strand's weight asks
+ * for none at four substeps.
  *
  * Gravity, drag, head forces and the velocity products are explicit, taken at the middle of
  * the step (explicit midpoint): at the rates q̇ + h q̈₀ / 2, with q̈₀ the chain's acceleration
@@ -792,7 +794,11 @@ template<int W>
     const ArticulatedTerms<W> &x = terms[i];
     distal = distal + x.force;
     const Floats tension = chain::max(dot(distal, x.t), Floats{});
-    const Floats inertia = (x.m + x.drag_mass) * (x.d * x.d) * (1.0f / 12.0f) + (h * h) * x.k;
+    /* The share of the hinge's implicit spring and damper that holds the mode, h γ / 2 +
+     * h² k / 4 (see the top; γ = τ k, as tip_to_root takes it). */
+    const Floats armature =
+        implicit ? (h * (0.5f * params_.bending_damping) + (0.25f * h) * h) * x.k : Floats{};
+    const Floats inertia = (x.m + x.drag_mass) * (x.d * x.d) * (1.0f / 12.0f) + armature;
     fastest_wave2 = chain::max(fastest_wave2, (tension * x.d) / inertia);
   }
   for (int lane = 0; lane < W; lane++) {
