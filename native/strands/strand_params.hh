@@ -10,10 +10,9 @@
  * the look does not depend on how finely a strand is cut. How much a strand of length L
  * droops is set by the one number Γ = c g L³ / EI (gamma()).
  *
- * The kurihara1993 model (the default: the articulated model still diverges in heavy contact,
- * e.g. Sintel's roots inside the bust or a 15 m/s wind pressing hair on the head) reads k_θ,
- * k_φ, γ and c per hinge. Its defaults describe a single human hair (~70 µm thick, 5·10⁻⁶ kg/m) cut into segments of
- * about 2 cm (a 0.3 m strand in 16 segments): the hinge springs hold a style against gravity
+ * The kurihara1993 model (the paper's own, its preset's; the articulated model is the default)
+ * reads k_θ, k_φ, γ and c per hinge. Its defaults describe a single human hair (~70 µm
+ * thick, 5·10⁻⁶ kg/m) cut into segments of about 2 cm (a 0.3 m strand in 16 segments): the hinge springs hold a style against gravity
  * with a sag of roughly 0.1 rad per hinge when the strand is horizontal, and the damping is
  * about a fifth of critical for the hinge spring. The hinge constants are per hinge, so they
  * are tuned for that segment length: halving the segment length asks for roughly half the
