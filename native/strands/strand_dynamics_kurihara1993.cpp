@@ -19,9 +19,10 @@ namespace hairdyn {
  * explicitly, and in a wind of 10 m/s the air's pull on the default hair, 120 times its
  * weight, makes that spring stiff enough that four substeps a frame feed its swing (ω h ≈
  * 2.2 on head_shake.blend's 2.75 cm segments, against the hinge's inertia with the spring's
- * armature): that hair, head still, thrashed at 1.3 m/s. The
- * implicit integrator takes the part of that stiffness that explicit steps cannot hold
- * (beyond ω h = 1 against the hinge's inertia) linearly implicit, as it takes the spring
+ * armature): that hair, head still, thrashed at 1.3 m/s. The implicit integrator takes the
+ * part of that stiffness that explicit steps cannot hold (beyond ω h = 1 against the step's
+ * inertia I + h γ + h² k, within the ω h < 2 that I + h γ / 2 + h² k / 4 gives: see
+ * strand_dynamics_articulated.cpp) linearly implicit, as it takes the spring
  * (hinge_integration.hh): the hinge's step as for a spring stiffer by that part. The pull of
  * a hanging segment's weight asks for none at four substeps. */
 HingeStep<vec2> StrandSolver::pulled_hinge_step(const size_t i, const float h, const vec2 &k,

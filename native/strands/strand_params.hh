@@ -12,11 +12,11 @@
  *
  * The kurihara1993 model (the paper's own, its preset's; the articulated model is the default)
  * reads k_θ, k_φ, γ and c per hinge. Its defaults describe a single human hair (~70 µm
- * thick, 5·10⁻⁶ kg/m) cut into segments of about 2 cm (a 0.3 m strand in 16 segments): the hinge springs hold a style against gravity
- * with a sag of roughly 0.1 rad per hinge when the strand is horizontal, and the damping is
- * about a fifth of critical for the hinge spring. The hinge constants are per hinge, so they
- * are tuned for that segment length: halving the segment length asks for roughly half the
- * stiffness for the same look. */
+ * thick, 5·10⁻⁶ kg/m) cut into segments of about 2 cm (a 0.3 m strand in 16 segments): the
+ * hinge springs hold a style against gravity with a sag of roughly 0.1 rad per hinge when
+ * the strand is horizontal, and the damping is about a fifth of critical for the hinge
+ * spring. The hinge constants are per hinge, so they are tuned for that segment length:
+ * halving the segment length asks for roughly half the stiffness for the same look. */
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
