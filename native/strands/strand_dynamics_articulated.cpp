@@ -41,21 +41,35 @@
  * strand ran away. A chain hung in a steady wind settles at the angle its forces give on any
  * substep (test AChainInASteadyWindHangsAtTheAngleItsForcesGive).
  *
- * Tension stiffens the chain, and the step takes that stiffness explicitly: the external
- * force beyond a hinge that pulls along its segment, T (the drag of the air streaming past a
- * hair, its weight, the head's spin), holds a rod turning about its centre as a spring would,
- * with T d of torque per radian (T at both ends): the chain's zigzag mode, ω² = T d / I, I the
- * rod's inertia about its centre, (m + drag armature) d² / 12. With the hinge's spring k and
- * damper γ implicit (their armature h γ + h² k in the step), semi-implicit Euler keeps the
- * mode bounded while h² T d < 4 (I + h γ / 2 + h² k / 4) (Jury's test on the step's 2 × 2
- * map): ω h < 2 (max_wave_phase) with I + h γ / 2 + h² k / 4 for I. The air's pull on a
- * hair is large, 20 times its weight at 5 m/s, and at four substeps a frame the hinges
- * zigzagged without end at any wind over 2 m/s (3 mm a frame of jitter on head_shake.blend's
- * hair at 5 m/s, head still), and gales from 60 m/s ran strands away (tests
- * StrandsInASteadyBreezeComeToRest, NoStrandRunsAwayInAGaleFromRest). A strand whose mode is
- * faster cuts its step as a fast-turning one does (steps_needed): about three steps a
- * substep for 30 cm strands of 16 segments in a 2 m/s wind. A hanging strand's weight asks
- * for none at four substeps.
+ * Tension stiffens the chain: the external force beyond a hinge that pulls along its
+ * segment, T (the drag of the air streaming past a hair, its weight, the head's spin), holds
+ * a rod turning about its centre as a spring would, with T d of torque per radian (T at both
+ * ends): the chain's zigzag mode, ω² = T d / I, I the rod's inertia about its centre,
+ * (m + drag armature) d² / 12. Taken explicitly, with the hinge's spring k and damper γ
+ * implicit (their armature h γ + h² k in the step), semi-implicit Euler keeps the mode bounded
+ * only while h² T d < 4 (I + h γ / 2 + h² k / 4) (Jury's test on the step's 2 × 2 map):
+ * ω h < 2 (max_wave_phase) with I + h γ / 2 + h² k / 4 for I. The air's pull on a hair is
+ * large, 20 times its weight at 5 m/s: at four substeps a frame the hinges zigzagged without
+ * end at any wind over 2 m/s, and cutting the step to hold ω h < 2 took about three steps a
+ * substep for 30 cm strands of 16 segments in a 2 m/s wind (the explicit integrator still
+ * cuts so: steps_needed).
+ *
+ * The implicit integrator takes the stiffness linearly implicit instead, as it does the
+ * springs. With the forces held over the step, the potential of a constant force F at r
+ * from the rod's hinge point has, in the rod's turn δθ, the Hessian (F · r) 1 − (F rᵀ +
+ * r Fᵀ) / 2: the rods' own turns only, one block per body, which the articulated-body
+ * recursion takes as it takes the drag's armature. Of it the step keeps the tension's part
+ * along the rod, κ (1 − t tᵀ) with κ = T d ≥ 0 (the rest is indefinite and stays explicit),
+ * and only beyond what the step holds explicitly, explicit_wave_phase² I / h²: the modes the
+ * eye follows stay free of the numerical damping of implicit Euler. The rod's inertia at its
+ * hinge point gains h² κ (1 − t tᵀ), and its bias h κ ω⊥ (its turn across its axis at the
+ * step's start rates, relative to the head); the mode is then bounded at any ω h (Jury's test
+ * again: h² κ_explicit − h² κ_implicit < 4 I). Strands in a steady breeze come to rest at any
+ * wind, and no step is cut for it (BM_StrandStep, a 2 m/s wind: 2.8× faster on one core,
+ * 3.2× on two; head_shake.blend's hair in a 100 m/s gale 40×); strands of 16
+ * segments caught from rest by a 60 m/s gale hold (with the cut steps, 16 and 32 segments
+ * ran away from 60 m/s; 32 still do; tests StrandsInASteadyBreezeComeToRest,
+ * NoStrandRunsAwayInAGaleFromRest).
  *
  * Gravity, drag, head forces and the velocity products are explicit, taken at the middle of
  * the step (explicit midpoint): at the rates q̇ + h q̈₀ / 2, with q̈₀ the chain's acceleration
@@ -133,6 +147,7 @@ template<int W> struct alignas(chain::lane_alignment) StrandSolver::ArticulatedT
   chain::V3<F> parent_omega;     /* the parent's turn, relative to the head */
   chain::V3<F> relative_turn;    /* θ̇ e_θ − φ̇ x across the hinge */
   chain::V3<F> omega;            /* the segment's turn */
+  chain::V3<F> omega_start;      /* the same at the step's start rates */
   chain::V3<F> half;             /* d t / 2, to the segment's centre */
   chain::V3<F> force;            /* F at the centre */
   chain::V3<F> couple;           /* the drag's couple (ForceField::drag_couple) */
@@ -141,6 +156,9 @@ template<int W> struct alignas(chain::lane_alignment) StrandSolver::ArticulatedT
   chain::M3<F> rest;             /* the rest rotation from the parent's frame */
   F m, d, k;                     /* mass, length, hinge stiffness */
   F drag_mass; /* h times the drag's stiffness over the rod (implicit integrator; else 0), kg */
+  /* The share of the tension's stiffness T d the step takes implicitly, N m/rad (implicit
+   * integrator; else 0): see the top of the file. */
+  F tension_stiffness;
   chain::V2<F> angles, rates;    /* q, q̇ */
 };
 
@@ -229,7 +247,23 @@ HAIRDYN_CHAIN_INLINE void tip_to_root(Link<R> *links, const Terms *terms, const 
     c.xx = c.xx + inertial;
     c.yy = c.yy + inertial;
     c.zz = c.zz + inertial;
-    const V3<R> p_torque = child_torque - cross(half, force) - widen(x.couple);
+    V3<R> p_torque = child_torque - cross(half, force) - widen(x.couple);
+    if (implicit) {
+      /* The tension's stiffness beyond what the step holds, κ (1 − t tᵀ) on the rod's turn,
+       * linearly implicit: h² κ (1 − t tᵀ) in its inertia, and h κ ω⊥ (its turn across its
+       * axis at the step's start) in its bias (see the top of the file). */
+      const R kappa = widen(x.tension_stiffness);
+      const V3<R> t = widen(x.t);
+      const R hhk = hd * hd * kappa;
+      a.xx = a.xx + hhk * (1.0 - t.x * t.x);
+      a.yy = a.yy + hhk * (1.0 - t.y * t.y);
+      a.zz = a.zz + hhk * (1.0 - t.z * t.z);
+      a.xy = a.xy - hhk * (t.x * t.y);
+      a.xz = a.xz - hhk * (t.x * t.z);
+      a.yz = a.yz - hhk * (t.y * t.z);
+      const V3<R> w = widen(x.omega_start);
+      p_torque = p_torque + (hd * kappa) * (w - dot(w, t) * t);
+    }
     const V3<R> p_force = child_force + (m * cross(omega, cross(omega, half)) - force);
     const R gamma = damping * k; /* Kelvin–Voigt: γ = τ k */
     const R armature = implicit ? hd * gamma + hd * hd * k : zero;
@@ -709,6 +743,7 @@ template<int W>
   const Floats half_h = 0.5f * h;
   V3<Floats> node_velocity{}; /* relative to the head */
   V3<Floats> parent_omega{};  /* relative to the head */
+  V3<Floats> parent_omega_start{}; /* the same at the step's start rates */
   V3<Floats> arm{};
   /* (rad/s)², of a segment or across a hinge: squares compared, one square root at the end
    * (the same bits as comparing the lengths, √ being monotonic and correctly rounded). */
@@ -741,6 +776,7 @@ template<int W>
     node = node + arm;
     node_velocity = node_velocity + cross(parent_omega, arm);
     const V3<Floats> omega = parent_omega + relative_turn;
+    const V3<Floats> omega_start = parent_omega_start + (rates.x * e_theta - rates.y * pole);
     fastest_turn2 = chain::max(fastest_turn2,
                                chain::max(dot(omega, omega), dot(relative_turn, relative_turn)));
 
@@ -773,6 +809,7 @@ template<int W>
     x.parent_omega = parent_omega;
     x.relative_turn = relative_turn;
     x.omega = omega;
+    x.omega_start = omega_start;
     x.half = half;
     x.rate_product = rate.x * rate.y;
     x.rest = rest;
@@ -783,15 +820,19 @@ template<int W>
     x.rates = rates;
 
     parent_omega = omega;
+    parent_omega_start = omega_start;
     arm = d * t;
   }
   /* The tension's zigzag mode (see the top of the file): ω² = T d / I at each rod, T the
-   * external force beyond its hinge along it (none if it pushes), reported as the turn rate
-   * that asks for as many steps (wave_turn_scale). */
+   * external force beyond its hinge along it (none if it pushes). The implicit integrator
+   * takes the stiffness T d beyond what the step holds explicitly, explicit_wave_phase² I / h²,
+   * linearly implicit (tip_to_root); the explicit one reports the mode as the turn rate that
+   * asks for as many steps (wave_turn_scale). */
   V3<Floats> distal{};
   Floats fastest_wave2{};
+  const Floats held = (explicit_wave_phase * explicit_wave_phase) / (h * h);
   for (size_t i = n; i-- > 0;) {
-    const ArticulatedTerms<W> &x = terms[i];
+    ArticulatedTerms<W> &x = terms[i];
     distal = distal + x.force;
     const Floats tension = chain::max(dot(distal, x.t), Floats{});
     /* The share of the hinge's implicit spring and damper that holds the mode, h γ / 2 +
@@ -799,7 +840,13 @@ template<int W>
     const Floats armature =
         implicit ? (h * (0.5f * params_.bending_damping) + (0.25f * h) * h) * x.k : Floats{};
     const Floats inertia = (x.m + x.drag_mass) * (x.d * x.d) * (1.0f / 12.0f) + armature;
-    fastest_wave2 = chain::max(fastest_wave2, (tension * x.d) / inertia);
+    if (implicit) {
+      x.tension_stiffness = chain::max(tension * x.d - held * inertia, Floats{});
+    }
+    else {
+      x.tension_stiffness = Floats{};
+      fastest_wave2 = chain::max(fastest_wave2, (tension * x.d) / inertia);
+    }
   }
   for (int lane = 0; lane < W; lane++) {
     r_fastest_turn[lane] = std::max(std::sqrt(fastest_turn2[lane]),
