@@ -60,15 +60,17 @@
  * r Fᵀ) / 2: the rods' own turns only, one block per body, which the articulated-body
  * recursion takes as it takes the drag's armature. Of it the step keeps the tension's part
  * along the rod, κ (1 − t tᵀ) with κ = T d ≥ 0 (the rest is indefinite and stays explicit),
- * and only beyond what the step holds explicitly, explicit_wave_phase² I / h²: the modes the
- * eye follows stay free of the numerical damping of implicit Euler. The rod's inertia at its
+ * and only beyond what the step holds explicitly, explicit_wave_phase² I / h² (the slow
+ * swing, held by the same stiffness, is damped by that share too: see the constant; the air
+ * damps it far more). The rod's inertia at its
  * hinge point gains h² κ (1 − t tᵀ), and its bias h κ ω⊥ (its turn across its axis at the
  * step's start rates, relative to the head); the mode is then bounded at any ω h (Jury's test
  * again: h² κ_explicit − h² κ_implicit < 4 I). Strands in a steady breeze come to rest at any
  * wind, and no step is cut for it (BM_StrandStep, a 2 m/s wind: 2.8× faster on one core,
  * 3.2× on two; head_shake.blend's hair in a 100 m/s gale 40×); strands of 16
  * segments caught from rest by a 60 m/s gale hold (with the cut steps, 16 and 32 segments
- * ran away from 60 m/s; 32 still do; tests StrandsInASteadyBreezeComeToRest,
+ * ran away from 60 m/s; 32 still do, and once in 48 frames at 30 m/s in turbulence, which
+ * the cut steps held; tests StrandsInASteadyBreezeComeToRest,
  * NoStrandRunsAwayInAGaleFromRest).
  *
  * Gravity, drag, head forces and the velocity products are explicit, taken at the middle of
