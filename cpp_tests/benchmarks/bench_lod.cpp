@@ -9,6 +9,9 @@
  *   CoarseStrips     only the top strips
  *   Lod/close        the level of detail, camera 0.45 m from the face (Table 1)
  *   Lod/zoom_out     the level of detail, camera moving from 0.45 m to 8 m (Table 2)
+ *                    (the argument is the coarsest level, where hidden hair goes: 0, the
+ *                    top strips; 2, the clusters of the finest strips' quadrants (these
+ *                    strips split once); 3, their quadrants)
  *   Lod/close_hair_hair  Lod/close with hair–hair collision (§5.3) between the groups'
  *                    swept spheres, counted as collision (as Ward's tables count it); its
  *                    fine simulation has it too
@@ -106,7 +109,7 @@ enum class Config {
 
 /* ms per frame of `sintel_frames_num` frames (the first 6 with hair–hair: seconds a frame on
  * this dense groom), with and without collision. */
-void run(benchmark::State &state, const Config config)
+void run(benchmark::State &state, const Config config, const int coarsest_level = 0)
 {
   const SintelScene &s = sintel();
   if (!s.loaded) {
@@ -126,8 +129,10 @@ void run(benchmark::State &state, const Config config)
       const bool lod = config == Config::LodClose || config == Config::LodZoomOut ||
                        config == Config::LodCloseHairHair;
       if (lod) {
+        LodParams params = sintel_lod_params();
+        params.coarsest_level = coarsest_level;
         LodSolver solver(s.offsets, s.positions, {}, {}, mat4(1.0f), StrandParams(), sintel_wind(),
-                         sintel_lod_params());
+                         params);
         solver.set_colliders(colliders, CollisionParams());
         /* Without collision the bust still hides hair: the same selection as with it. */
         solver.set_occluders(s.colliders.get());
@@ -230,8 +235,14 @@ static void BM_LodSintel_FinestSkeletons(benchmark::State &state)
   run(state, Config::FinestSkeletons);
 }
 static void BM_LodSintel_CoarseStrips(benchmark::State &state) { run(state, Config::CoarseStrips); }
-static void BM_LodSintel_Lod_CameraClose(benchmark::State &state) { run(state, Config::LodClose); }
-static void BM_LodSintel_Lod_ZoomOut(benchmark::State &state) { run(state, Config::LodZoomOut); }
+static void BM_LodSintel_Lod_CameraClose(benchmark::State &state)
+{
+  run(state, Config::LodClose, int(state.range(0)));
+}
+static void BM_LodSintel_Lod_ZoomOut(benchmark::State &state)
+{
+  run(state, Config::LodZoomOut, int(state.range(0)));
+}
 static void BM_LodSintel_Lod_CameraCloseHairHair(benchmark::State &state)
 {
   run(state, Config::LodCloseHairHair);
@@ -240,6 +251,18 @@ static void BM_LodSintel_Lod_CameraCloseHairHair(benchmark::State &state)
 BENCHMARK(BM_LodSintel_FineStrands)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LodSintel_FinestSkeletons)->Iterations(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LodSintel_CoarseStrips)->Iterations(1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LodSintel_Lod_CameraClose)->Iterations(1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LodSintel_Lod_ZoomOut)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LodSintel_Lod_CameraClose)
+    ->ArgName("coarsest")
+    ->Arg(0)
+    ->Arg(2)
+    ->Arg(3)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LodSintel_Lod_ZoomOut)
+    ->ArgName("coarsest")
+    ->Arg(0)
+    ->Arg(2)
+    ->Arg(3)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LodSintel_Lod_CameraCloseHairHair)->Iterations(1)->Unit(benchmark::kMillisecond);
