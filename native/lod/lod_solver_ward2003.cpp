@@ -527,98 +527,102 @@ void LodSolver::place_strands(const float frame_dt)
         }
         placed_nodes_[size_t(strand)] = node;
       }
-      keep_segment_lengths(rest_lengths, placed, strands_in_group);
+      if (rest_depths_.empty()) {
+        keep_segment_lengths(rest_lengths, placed, strands_in_group);
+      }
+    }
+    if (!rest_depths_.empty()) {
+      keep_lengths_outside_bodies(IndexRange{ groups.start * group,
+                                              std::min(groups.one_after_last() * group,
+                                                       strands_num) -
+                                                  groups.start * group });
     }
   });
-  if (!rest_depths_.empty()) {
-    push_out_of_bodies();
-  }
 }
 
-void LodSolver::push_out_of_bodies()
+void LodSolver::keep_lengths_outside_bodies(const IndexRange strands)
 {
   /* A strand placed by its offset from a skeleton goes where the skeleton takes it, through
    * the body where the skeleton bends toward it (a strip's edge strands wrap a shoulder its
    * middle clears): on Sintel's bust, 0.5-0.9% of the placed points lay more than 9 mm deep,
-   * the deepest 8-12 cm (0.9-1.6% with body collision by swept spheres alone). Such a point
-   * moves out along the normal the collision maps find until it is as deep as at rest, and
-   * 1% of its segment more; a strand that moved is then given back its segment lengths,
-   * which may take a point back in: those strands go again, up to push_rounds times in all
-   * (a head pressed by wind, swept spheres: the deepest point 89 mm without, 33 mm after 1
-   * round, 14 after 2, 5.3 after 4, 2.1 after 8). */
-  constexpr int push_rounds = 4;
+   * the deepest 8-12 cm. So the strands get their segment lengths back (follow the leader,
+   * as keep_segment_lengths) point by point from the root, the range's strands side by
+   * side, and each point, once at its length from the point before, is queried against the
+   * collision maps (the range's points of one index in one batch). A point deeper inside
+   * than at rest, by more than 1% of its segment, goes to the plane through the point as
+   * deep as at rest less that 1% (normal the maps'), at its length from the point before:
+   * the segment turns about that point out of the body, and the points after it follow
+   * from there. Pushing every point out along the normal and then giving the strands their
+   * lengths back took points back in: four rounds left a head pressed by wind 3.9 mm deep
+   * (now 0.5 mm; test PlacedStrandsStayOutOfTheHead), and cost 5.5 ms of a 22 ms frame of
+   * Sintel's level of detail (the frame now takes 19.5 ms). */
+  struct Scratch {
+    std::vector<vec3> points;
+    std::vector<int64_t> indices;
+    std::vector<uint8_t> hit;
+    std::vector<float> depth;
+    std::vector<vec3> normal, surface;
+    std::unique_ptr<ContactBatch<map_batch_size>> contacts{ new ContactBatch<map_batch_size> };
+    std::unique_ptr<MapBatch<map_batch_size>> batch{ new MapBatch<map_batch_size> };
+  };
+  thread_local Scratch scratch;
   const Span<int32_t> offsets = hierarchy_.curve_offsets();
-  for (int round = 0; round < push_rounds; round++) {
-    /* The first round queries every point where it is (strand k is strand k); the next ones
-     * the points of the strands that moved, gathered one after another. */
-    const bool every_strand = round == 0;
-    const int64_t strands_num = every_strand ? hierarchy_.strands_num() :
-                                               int64_t(push_strands_.size());
-    if (strands_num == 0) {
-      break;
-    }
-    if (!every_strand) {
-      push_offsets_.assign(1, 0);
-      for (const int32_t strand : push_strands_) {
-        push_offsets_.push_back(push_offsets_.back() +
-                                int32_t(curve_points(offsets, strand).size));
+  int64_t points_num = 0;
+  for (int64_t strand = strands.start; strand < strands.one_after_last(); strand++) {
+    points_num = std::max(points_num, curve_points(offsets, strand).size);
+  }
+  for (auto *buffer : { &scratch.points, &scratch.normal, &scratch.surface }) {
+    buffer->resize(size_t(strands.size));
+  }
+  scratch.indices.resize(size_t(strands.size));
+  scratch.hit.resize(size_t(strands.size));
+  scratch.depth.resize(size_t(strands.size));
+  for (int64_t i = 1; i < points_num; i++) {
+    int64_t n = 0;
+    for (int64_t strand = strands.start; strand < strands.one_after_last(); strand++) {
+      const IndexRange strand_points = curve_points(offsets, strand);
+      if (i >= strand_points.size) {
+        continue;
       }
-      push_points_.resize(size_t(push_offsets_.back()));
-      for (int64_t k = 0; k < strands_num; k++) {
-        const IndexRange strand_points = curve_points(offsets, push_strands_[size_t(k)]);
-        std::copy_n(positions_wo_.begin() + strand_points.start, strand_points.size,
-                    push_points_.begin() + push_offsets_[size_t(k)]);
-      }
+      const int64_t point = strand_points.start + i;
+      follow(positions_wo_[size_t(point) - 1], rest_lengths_[size_t(point)],
+             positions_wo_[size_t(point)]);
+      scratch.points[size_t(n)] = positions_wo_[size_t(point)];
+      scratch.indices[size_t(n++)] = point;
     }
-    const Span<vec3> queried = every_strand ? Span<vec3>(positions_wo_) : Span<vec3>(push_points_);
-    const Span<int32_t> firsts = every_strand ? offsets : Span<int32_t>(push_offsets_);
-    const auto strand_of = [&](const int64_t k) {
-      return every_strand ? int32_t(k) : push_strands_[size_t(k)];
-    };
-    contact_depth_.resize(std::max(contact_depth_.size(), size_t(queried.size())));
-    find_body_contacts(queried, MutableSpan<float>(contact_depth_.data(), queried.size()));
-    /* Push, then give the moved strands of each run of keep_lengths_group their lengths
-     * (together, as place_strands), while their points are in the cache. */
-    constexpr int64_t group = keep_lengths_group;
-    push_moved_.assign(size_t(strands_num), 0);
-    parallel_for((strands_num + group - 1) / group, 64, [&](const IndexRange groups) {
-      for (int64_t g = groups.start; g < groups.one_after_last(); g++) {
-        Span<float> rest_lengths[group];
-        MutableSpan<vec3> moved[group];
-        int moved_num = 0;
-        for (int64_t k = g * group; k < std::min((g + 1) * group, strands_num); k++) {
-          const IndexRange strand_points = curve_points(offsets, strand_of(k));
-          for (int64_t i = 1; i < strand_points.size; i++) {
-            const size_t q = size_t(firsts[k] + i);
-            const size_t point = size_t(strand_points.start + i);
-            const float excess = contact_depth_[q] - rest_depths_[point];
-            /* Less than 1% of a segment deeper than at rest is left (a point near the scalp
-             * moves that much within the maps' surface as its skeleton sways). */
-            const float margin = 0.01f * rest_lengths_[point];
-            if (contact_hit_[q] && excess > margin) {
-              positions_wo_[point] += (excess + margin) * contact_normal_[q];
-              push_moved_[size_t(k)] = 1;
-            }
-          }
-          if (push_moved_[size_t(k)]) {
-            rest_lengths[moved_num] =
-                Span<float>(rest_lengths_).slice(strand_points.start, strand_points.size);
-            moved[moved_num++] =
-                MutableSpan<vec3>(positions_wo_.data() + strand_points.start, strand_points.size);
-          }
+    find_contacts_serial(*bodies_, Span<vec3>(scratch.points.data(), n),
+                         MutableSpan<uint8_t>(scratch.hit.data(), n),
+                         MutableSpan<float>(scratch.depth.data(), n),
+                         MutableSpan<vec3>(scratch.normal.data(), n),
+                         MutableSpan<vec3>(scratch.surface.data(), n), *scratch.contacts,
+                         *scratch.batch);
+    for (int64_t k = 0; k < n; k++) {
+      const int64_t point = scratch.indices[size_t(k)];
+      const float excess = scratch.depth[size_t(k)] - rest_depths_[size_t(point)];
+      /* Less than 1% of a segment deeper than at rest is left (a point near the scalp moves
+       * that much within the maps' surface as its skeleton sways). */
+      const float margin = 0.01f * rest_lengths_[size_t(point)];
+      if (scratch.hit[size_t(k)] && excess > margin) {
+        /* Onto the plane through the point moved out, at the segment's length. */
+        const vec3 normal = scratch.normal[size_t(k)];
+        const vec3 previous = positions_wo_[size_t(point) - 1];
+        const vec3 out = positions_wo_[size_t(point)] + (excess + margin) * normal;
+        const float rest_length = rest_lengths_[size_t(point)];
+        const vec3 d = out - previous;
+        const float height = glm::dot(normal, d); /* of the plane above the point before */
+        const vec3 across = d - height * normal;
+        const float across_length = glm::length(across);
+        if (height >= rest_length || across_length <= 1e-6f * rest_length) {
+          positions_wo_[size_t(point)] = previous + rest_length * normal;
         }
-        if (moved_num > 0) {
-          keep_segment_lengths(rest_lengths, moved, moved_num);
+        else {
+          const float reach =
+              std::sqrt(std::max(rest_length * rest_length - height * height, 0.0f));
+          positions_wo_[size_t(point)] =
+              previous + height * normal + (reach / across_length) * across;
         }
       }
-    });
-    push_next_.clear();
-    for (int64_t k = 0; k < strands_num; k++) {
-      if (push_moved_[size_t(k)]) {
-        push_next_.push_back(strand_of(k));
-      }
     }
-    push_strands_.swap(push_next_);
   }
 }
 

@@ -155,9 +155,9 @@ class LodSolver {
   void select(const LodCamera &camera);
   void update_frames();
   void place_strands(float frame_dt);
-  /* Moves the placed strands' points that are deeper inside bodies_ than at rest back out
-   * (roots stay), then gives the strands that moved back their segment lengths. */
-  void push_out_of_bodies();
+  /* Gives the placed `strands` (a range) their segment lengths back, root to tip, moving
+   * each point that lies deeper inside bodies_ than at rest back out on the way. */
+  void keep_lengths_outside_bodies(IndexRange strands);
   /* find_contacts of `points` against bodies_: depths into r_depths, the rest into the
    * contact_ buffers. */
   void find_body_contacts(Span<vec3> points, MutableSpan<float> r_depths);
@@ -203,13 +203,8 @@ class LodSolver {
   std::vector<int32_t> offset_nodes_;
   std::vector<float> rest_lengths_; /* m, from the previous point at rest (0 at roots) */
   std::vector<int32_t> point_levels_;
-  /* push_out_of_bodies's strands of a round (after the first) and of the next, their points
-   * (push_offsets_: per strand, its first), the points' contacts (find_body_contacts), and per
-   * strand whether it moved. */
-  std::vector<int32_t> push_strands_, push_next_, push_offsets_;
-  std::vector<vec3> push_points_;
-  std::vector<uint8_t> contact_hit_, push_moved_;
-  std::vector<float> contact_depth_;
+  /* find_body_contacts' contacts. */
+  std::vector<uint8_t> contact_hit_;
   /* m, per point: how deep inside bodies_ it lies at rest (the groom near the scalp lies
    * within the collision maps' surface: it may stay as deep as that). */
   std::vector<float> rest_depths_;

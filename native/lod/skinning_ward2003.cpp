@@ -107,12 +107,7 @@ void keep_segment_lengths(const Span<float> *rest_lengths, const MutableSpan<vec
       if (i >= x.size()) {
         continue;
       }
-      const float rest_length = rest_lengths[s][i];
-      const vec3 along = x[i] - x[i - 1];
-      const float length = glm::length(along);
-      if (length > 1e-6f * rest_length) { /* a point on its parent keeps its place */
-        x[i] = x[i - 1] + (rest_length / length) * along;
-      }
+      follow(x[i - 1], rest_lengths[s][i], x[i]);
     }
   }
 }

@@ -45,6 +45,16 @@ void keep_segment_lengths(Span<float> rest_lengths, MutableSpan<vec3> r_position
 constexpr int keep_lengths_group = 8;
 void keep_segment_lengths(const Span<float> *rest_lengths, const MutableSpan<vec3> *r_positions_wo,
                           int strands_num);
+/* One step of those: `r_point` moved along the line from `previous` to `rest_length` from it
+ * (a point on `previous` keeps its place). */
+inline void follow(const vec3 &previous, const float rest_length, vec3 &r_point)
+{
+  const vec3 along = r_point - previous;
+  const float length = glm::length(along);
+  if (length > 1e-6f * rest_length) {
+    r_point = previous + (rest_length / length) * along;
+  }
+}
 
 /* §6.2: a child's control points on its parent's current skeleton and frames, by the child's
  * stored offsets. */
