@@ -194,7 +194,7 @@ TEST(LodSolver, StrandsBehindTheHeadAreCoarsest)
       front_trees += all_front;
     }
     /* Of 48 trees, 6 are wholly hidden without occlusion and 2 with it: there the top strips
-     * drive them, and a strip's strands kept out of the head (keep_lengths_outside_bodies) show some
+     * drive them, and a strip's strands kept out of the head (keep_lengths) show some
      * point past its outline in a third tree. */
     EXPECT_GE(hidden_trees, 2);
     EXPECT_GE(front_trees, 3);
@@ -692,7 +692,7 @@ TEST(LodSolver, WardTablesSceneOnSintel)
           return is_finite(p);
         }));
     stretch = std::max(stretch, max_relative_stretch(s.offsets, s.positions, solver.positions()));
-    /* Placed strands stay out of the bust (LodSolver::keep_lengths_outside_bodies), as the groom is at
+    /* Placed strands stay out of the bust (LodSolver::keep_lengths), as the groom is at
      * rest: points deeper than 1% of the bust's size. */
     const float tolerance = CollisionParams().penetration_tolerance * s.colliders->size_wo();
     deepest_share = std::max(
@@ -718,7 +718,7 @@ TEST(LodSolver, WardTablesSceneOnSintel)
 
 /* A strand placed by its offset from a strip's or cluster's skeleton goes through the body
  * where the skeleton bends toward it; the placed points are kept out of the colliders, as
- * deep as at rest at most (LodSolver::keep_lengths_outside_bodies), whether the skeletons collide by
+ * deep as at rest at most (LodSolver::keep_lengths), whether the skeletons collide by
  * the maps (set_colliders) or by the swept spheres' pass (set_bodies). Wind from above
  * presses the hair onto the head; the camera far away keeps the coarsest strips. Exact depths
  * (the head mesh), against the groom at rest. */

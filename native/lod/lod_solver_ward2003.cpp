@@ -483,79 +483,59 @@ void LodSolver::place_strands(const float frame_dt)
   const float tau = lod_params_.transition_time;
   const float decay = tau > 0.0f ? std::exp(-frame_dt / tau) : 0.0f;
   const Span<int32_t> offsets = hierarchy_.curve_offsets();
-  /* Strands keep_lengths_group at a time: keep_segment_lengths overlaps their chains. */
-  constexpr int64_t group = keep_lengths_group;
-  const int64_t strands_num = hierarchy_.strands_num();
-  parallel_for((strands_num + group - 1) / group, 32, [&](const IndexRange groups) {
-    for (int64_t g = groups.start; g < groups.one_after_last(); g++) {
-      const int64_t first = g * group;
-      const int strands_in_group = int(std::min(group, strands_num - first));
-      Span<float> rest_lengths[group];
-      MutableSpan<vec3> placed[group];
-      for (int k = 0; k < strands_in_group; k++) {
-        const int64_t strand = first + k;
-        const IndexRange points = curve_points(offsets, strand);
-        const MutableSpan<vec3> out(positions_wo_.data() + points.start, points.size);
-        const MutableSpan<vec3> residual(residuals_wo_.data() + points.start, points.size);
-        const int32_t node = strand_nodes_[size_t(strand)];
-        const int32_t old_node = placed_nodes_[size_t(strand)];
-        /* §6.3: on a switch the jump between the old and the new skeleton's placement is
-         * kept, and the spring pulls it to zero over the next frames. */
-        const bool switched = old_node != node && tau > 0.0f;
+  parallel_for(hierarchy_.strands_num(), 256, [&](const IndexRange strands) {
+    for (int64_t strand = strands.start; strand < strands.one_after_last(); strand++) {
+      const IndexRange points = curve_points(offsets, strand);
+      const MutableSpan<vec3> out(positions_wo_.data() + points.start, points.size);
+      const MutableSpan<vec3> residual(residuals_wo_.data() + points.start, points.size);
+      const int32_t node = strand_nodes_[size_t(strand)];
+      const int32_t old_node = placed_nodes_[size_t(strand)];
+      /* §6.3: on a switch the jump between the old and the new skeleton's placement is
+       * kept, and the spring pulls it to zero over the next frames. */
+      const bool switched = old_node != node && tau > 0.0f;
+      if (switched) {
+        skin_strand(hierarchy_, old_node, strand, skeleton(old_node), frames(old_node), out);
+      }
+      for (int64_t i = 0; i < points.size; i++) {
+        residual[i] = switched ? decay * residual[i] + out[i] : decay * residual[i];
+      }
+      const MutableSpan<vec3> on_node(offsets_.data() + points.start, points.size);
+      if (offset_nodes_[size_t(strand)] != node) {
+        strand_offsets(hierarchy_, node, strand, on_node);
+        offset_nodes_[size_t(strand)] = node;
+      }
+      skin_strand(hierarchy_, strand, on_node, skeleton(node), frames(node), out);
+      for (int64_t i = 0; i < points.size; i++) {
         if (switched) {
-          skin_strand(hierarchy_, old_node, strand, skeleton(old_node), frames(old_node), out);
+          residual[i] -= out[i];
         }
-        for (int64_t i = 0; i < points.size; i++) {
-          residual[i] = switched ? decay * residual[i] + out[i] : decay * residual[i];
-        }
-        const MutableSpan<vec3> on_node(offsets_.data() + points.start, points.size);
-        if (offset_nodes_[size_t(strand)] != node) {
-          strand_offsets(hierarchy_, node, strand, on_node);
-          offset_nodes_[size_t(strand)] = node;
-        }
-        skin_strand(hierarchy_, strand, on_node, skeleton(node), frames(node), out);
-        for (int64_t i = 0; i < points.size; i++) {
-          if (switched) {
-            residual[i] -= out[i];
-          }
-          out[i] += residual[i];
-        }
-        rest_lengths[k] = Span<float>(rest_lengths_).slice(points.start, points.size);
-        placed[k] = out;
-        for (int64_t i = 0; i < points.size; i++) {
-          point_levels_[size_t(points.start + i)] = hierarchy_.depth(node);
-        }
-        placed_nodes_[size_t(strand)] = node;
+        out[i] += residual[i];
       }
-      if (rest_depths_.empty()) {
-        keep_segment_lengths(rest_lengths, placed, strands_in_group);
+      for (int64_t i = 0; i < points.size; i++) {
+        point_levels_[size_t(points.start + i)] = hierarchy_.depth(node);
       }
+      placed_nodes_[size_t(strand)] = node;
     }
-    if (!rest_depths_.empty()) {
-      keep_lengths_outside_bodies(IndexRange{ groups.start * group,
-                                              std::min(groups.one_after_last() * group,
-                                                       strands_num) -
-                                                  groups.start * group });
-    }
+    keep_lengths(strands);
   });
 }
 
-void LodSolver::keep_lengths_outside_bodies(const IndexRange strands)
+void LodSolver::keep_lengths(const IndexRange strands)
 {
-  /* A strand placed by its offset from a skeleton goes where the skeleton takes it, through
-   * the body where the skeleton bends toward it (a strip's edge strands wrap a shoulder its
-   * middle clears): on Sintel's bust, 0.5-0.9% of the placed points lay more than 9 mm deep,
-   * the deepest 8-12 cm. So the strands get their segment lengths back (follow the leader,
-   * as keep_segment_lengths) point by point from the root, the range's strands side by
-   * side, and each point, once at its length from the point before, is queried against the
-   * collision maps (the range's points of one index in one batch). A point deeper inside
-   * than at rest, by more than 1% of its segment, goes to the plane through the point as
-   * deep as at rest less that 1% (normal the maps'), at its length from the point before:
-   * the segment turns about that point out of the body, and the points after it follow
-   * from there. Pushing every point out along the normal and then giving the strands their
-   * lengths back took points back in: four rounds left a head pressed by wind 3.9 mm deep
-   * (now 0.5 mm; test PlacedStrandsStayOutOfTheHead), and cost 5.5 ms of a 22 ms frame of
-   * Sintel's level of detail (the frame now takes 19.5 ms). */
+  /* The strands get their segment lengths back (follow) point by point from the root, the
+   * range's strands side by side (their serial chains of a square root and a division per
+   * point overlap). With bodies, a strand placed by its offset from a skeleton goes where the
+   * skeleton takes it, through the body where the skeleton bends toward it (a strip's edge
+   * strands wrap a shoulder its middle clears): on Sintel's bust, 0.5-0.9% of the placed
+   * points lay more than 9 mm deep, the deepest 8-12 cm. So each point, once at its length
+   * from the point before, is queried against the collision maps (the range's points of one
+   * index in one batch). A point deeper inside than at rest, by more than 1% of its segment,
+   * goes to the plane through the point as deep as at rest less that 1% (normal the maps'),
+   * at its length from the point before: the segment turns about that point out of the body,
+   * and the points after it follow from there. Pushing every point out along the normal and
+   * then giving the strands their lengths back took points back in: four rounds left a head
+   * pressed by wind 3.9 mm deep (now 0.5 mm; test PlacedStrandsStayOutOfTheHead), and cost
+   * 5.5 ms of a 22 ms frame of Sintel's level of detail (the frame now takes 19.5 ms). */
   struct Scratch {
     std::vector<vec3> points;
     std::vector<int64_t> indices;
@@ -589,6 +569,9 @@ void LodSolver::keep_lengths_outside_bodies(const IndexRange strands)
              positions_wo_[size_t(point)]);
       scratch.points[size_t(n)] = positions_wo_[size_t(point)];
       scratch.indices[size_t(n++)] = point;
+    }
+    if (rest_depths_.empty()) {
+      continue; /* no bodies */
     }
     find_contacts_serial(*bodies_, Span<vec3>(scratch.points.data(), n),
                          MutableSpan<uint8_t>(scratch.hit.data(), n),

@@ -156,8 +156,8 @@ class LodSolver {
   void update_frames();
   void place_strands(float frame_dt);
   /* Gives the placed `strands` (a range) their segment lengths back, root to tip, moving
-   * each point that lies deeper inside bodies_ than at rest back out on the way. */
-  void keep_lengths_outside_bodies(IndexRange strands);
+   * each point that lies deeper inside bodies_ (if any) than at rest back out on the way. */
+  void keep_lengths(IndexRange strands);
   /* find_contacts of `points` against bodies_: depths into r_depths, the rest into the
    * contact_ buffers. */
   void find_body_contacts(Span<vec3> points, MutableSpan<float> r_depths);

@@ -85,33 +85,6 @@ void skin_strand(const LodHierarchy &hierarchy, const int64_t strand, const Span
                [&](const int64_t i, const PointOnSkeleton & /*p*/) { return offsets[i - first]; });
 }
 
-void keep_segment_lengths(const Span<float> rest_lengths, const MutableSpan<vec3> r_positions_wo)
-{
-  keep_segment_lengths(&rest_lengths, &r_positions_wo, 1);
-}
-
-void keep_segment_lengths(const Span<float> *rest_lengths, const MutableSpan<vec3> *r_positions_wo,
-                          const int strands_num)
-{
-  assert(strands_num <= keep_lengths_group);
-  int64_t points_num = 0;
-  for (int s = 0; s < strands_num; s++) {
-    points_num = std::max(points_num, r_positions_wo[s].size());
-  }
-  /* Each strand's chain of square roots and divisions is serial; the strands' chains are
-   * interleaved point by point so that the processor overlaps them (the same operations per
-   * strand as one at a time). */
-  for (int64_t i = 1; i < points_num; i++) {
-    for (int s = 0; s < strands_num; s++) {
-      const MutableSpan<vec3> x = r_positions_wo[s];
-      if (i >= x.size()) {
-        continue;
-      }
-      follow(x[i - 1], rest_lengths[s][i], x[i]);
-    }
-  }
-}
-
 void place_child(const Span<vec3> parent_skeleton_wo, const Span<mat3> parent_frames,
                  const Span<vec3> offsets, const MutableSpan<vec3> r_child_wo)
 {

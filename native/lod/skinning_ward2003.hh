@@ -32,21 +32,14 @@ void strand_offsets(const LodHierarchy &hierarchy, int64_t node, int64_t strand,
 void skin_strand(const LodHierarchy &hierarchy, int64_t strand, Span<vec3> offsets,
                  Span<vec3> skeleton_wo, Span<mat3> frames, MutableSpan<vec3> r_positions_wo);
 
-/* Gives each segment of a placed strand its rest length, root to tip, keeping its direction
- * (follow the leader: Müller, Kim & Chentanez 2012, "Fast simulation of inextensible hair and
- * fur", §4, without the velocity correction, since a placed strand has no state of its own).
- * A strand placed by rigid offsets from a skeleton (skin_strand) stretches on the outside of
- * a bend of the skeleton and shrinks on the inside, by the offset times the turn between two
- * segments' frames; on wide strips that is several times a segment. `rest_lengths` holds each
- * point's distance to the previous point at rest (the root's is unused). */
-void keep_segment_lengths(Span<float> rest_lengths, MutableSpan<vec3> r_positions_wo);
-/* The same for up to keep_lengths_group strands at once (faster: their serial chains of a
- * square root and a division per point overlap), each with the same result as alone. */
-constexpr int keep_lengths_group = 8;
-void keep_segment_lengths(const Span<float> *rest_lengths, const MutableSpan<vec3> *r_positions_wo,
-                          int strands_num);
-/* One step of those: `r_point` moved along the line from `previous` to `rest_length` from it
- * (a point on `previous` keeps its place). */
+/* Follow the leader (Müller, Kim & Chentanez 2012, "Fast simulation of inextensible hair and
+ * fur", §4, without the velocity correction, since a placed strand has no state of its own),
+ * one point: `r_point` moved along the line from `previous` to `rest_length` from it (a point
+ * on `previous` keeps its place). Applied root to tip, it gives each segment of a placed
+ * strand its rest length, keeping its direction: a strand placed by rigid offsets from a
+ * skeleton (skin_strand) stretches on the outside of a bend of the skeleton and shrinks on
+ * the inside, by the offset times the turn between two segments' frames; on wide strips that
+ * is several times a segment. */
 inline void follow(const vec3 &previous, const float rest_length, vec3 &r_point)
 {
   const vec3 along = r_point - previous;
