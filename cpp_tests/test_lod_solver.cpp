@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "core/parallel.hh"
 #include "groom/groom.hh"
 #include "groom/metrics.hh"
 #include "collision/ssv_object_ward2003.hh"
 #include "lod/lod_solver_ward2003.hh"
+#include "lod/selection_ward2003.hh"
 #include "lod_scenes.hh"
 #include "lod_sintel_scene.hh"
 
@@ -199,6 +201,45 @@ TEST(LodSolver, StrandsBehindTheHeadAreCoarsest)
     EXPECT_GE(hidden_trees, 2);
     EXPECT_GE(front_trees, 3);
   }
+}
+
+/* hidden_by_colliders remembers the triangle that hid a point and tests it first; the answer
+ * must not depend on what it remembers: points around the head, each tested with the memory
+ * its neighbour along the sequence left (a triangle that hid another point, or none), give
+ * the answer of a test without memory, which the analytic sphere confirms away from its
+ * outline. */
+TEST(LodSolver, OcclusionMemoryGivesTheSameAnswer)
+{
+  const std::shared_ptr<ColliderSet> colliders = head_colliders();
+  const vec3 eye(0.0f, -0.35f, 0.05f);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  int64_t occluder = -1;
+  int hidden_num = 0, remembered_num = 0;
+  for (int i = 0; i < 4000; i++) {
+    const vec3 p = 0.12f * vec3(unit(rng), unit(rng), unit(rng)) + vec3(0.0f, 0.1f, 0.0f);
+    const bool remembered = occluder >= 0;
+    const bool with_memory = hidden_by_colliders(*colliders, eye, p, 0.002f, &occluder);
+    const bool without = hidden_by_colliders(*colliders, eye, p, 0.002f);
+    ASSERT_EQ(with_memory, without) << "point " << i;
+    EXPECT_EQ(occluder >= 0, with_memory);
+    hidden_num += without;
+    remembered_num += remembered && with_memory;
+    /* The segment's closest approach to the sphere's centre, well inside or outside the
+     * 0.095 m sphere the mesh approximates. */
+    const vec3 d = p - eye;
+    const float t = glm::clamp(-glm::dot(eye, d) / glm::dot(d, d), 0.0f,
+                               1.0f - 0.002f / glm::length(d));
+    const float approach = glm::length(eye + t * d);
+    if (approach < 0.085f && glm::length(p) > 0.1f) {
+      EXPECT_TRUE(without) << "point " << i;
+    }
+    if (approach > 0.1f) {
+      EXPECT_FALSE(without) << "point " << i;
+    }
+  }
+  EXPECT_GT(hidden_num, 500);
+  EXPECT_GT(remembered_num, 100);
 }
 
 TEST(LodSolver, AtMostOneLevelPerFrameApartFromOcclusion)

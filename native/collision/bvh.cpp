@@ -220,14 +220,21 @@ bool TriangleBVH::for_each_ray_hit(const vec3 &origin, const vec3 &direction, co
     }
     for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
       RayHit hit;
-      const vec3 *c = &corners_[size_t(i) * 3];
-      if (intersect_ray_triangle(origin, direction, c[0], c[1], c[2], hit) && hit.t <= t_max) {
-        hit.triangle = triangle_ids_[size_t(i)];
-        if (fn(hit)) {
-          return true;
-        }
+      if (hit_leaf(origin, direction, t_max, i, hit) && fn(i, hit)) {
+        return true;
       }
     }
+  }
+  return false;
+}
+
+bool TriangleBVH::hit_leaf(const vec3 &origin, const vec3 &direction, const float t_max,
+                           const int32_t leaf, RayHit &r_hit) const
+{
+  const vec3 *c = &corners_[size_t(leaf) * 3];
+  if (intersect_ray_triangle(origin, direction, c[0], c[1], c[2], r_hit) && r_hit.t <= t_max) {
+    r_hit.triangle = triangle_ids_[size_t(leaf)];
+    return true;
   }
   return false;
 }
@@ -236,7 +243,7 @@ void TriangleBVH::ray_hits(const vec3 &origin, const vec3 &direction, const floa
                            std::vector<RayHit> &r_hits) const
 {
   r_hits.clear();
-  for_each_ray_hit(origin, direction, t_max, [&](const RayHit &hit) {
+  for_each_ray_hit(origin, direction, t_max, [&](int32_t /*leaf*/, const RayHit &hit) {
     r_hits.push_back(hit);
     return false;
   });
@@ -245,10 +252,27 @@ void TriangleBVH::ray_hits(const vec3 &origin, const vec3 &direction, const floa
   });
 }
 
-bool TriangleBVH::ray_hits_any(const vec3 &origin, const vec3 &direction,
-                               const float t_max) const
+bool TriangleBVH::ray_hits_any(const vec3 &origin, const vec3 &direction, const float t_max,
+                               int32_t *const r_leaf) const
 {
-  return for_each_ray_hit(origin, direction, t_max, [](const RayHit & /*hit*/) { return true; });
+  int32_t found = -1;
+  const bool hit = for_each_ray_hit(origin, direction, t_max,
+                                    [&](const int32_t leaf, const RayHit & /*hit*/) {
+                                      found = leaf;
+                                      return true;
+                                    });
+  if (r_leaf != nullptr) {
+    *r_leaf = found;
+  }
+  return hit;
+}
+
+bool TriangleBVH::ray_hits_leaf(const vec3 &origin, const vec3 &direction, const float t_max,
+                                const int32_t leaf) const
+{
+  RayHit hit;
+  return leaf >= 0 && leaf < int32_t(triangle_ids_.size()) &&
+         hit_leaf(origin, direction, t_max, leaf, hit);
 }
 
 bool TriangleBVH::ray_farthest_hit(const vec3 &origin, const vec3 &direction,
@@ -276,8 +300,7 @@ bool TriangleBVH::ray_farthest_hit(const vec3 &origin, const vec3 &direction,
     }
     for (int32_t i = node.first_or_right; i < node.first_or_right + node.count; i++) {
       RayHit hit;
-      const vec3 *c = &corners_[size_t(i) * 3];
-      if (intersect_ray_triangle(origin, direction, c[0], c[1], c[2], hit) &&
+      if (hit_leaf(origin, direction, float_max, i, hit) &&
           (hit.t > best_t || (hit.t == best_t && triangle_ids_[size_t(i)] < r_hit.triangle)))
       {
         best_t = hit.t;

@@ -95,8 +95,13 @@ class TriangleBVH {
   /* Every hit with t in [0, t_max], sorted by t, appended to r_hits (cleared first). */
   void ray_hits(const vec3 &origin, const vec3 &direction, float t_max,
                 std::vector<RayHit> &r_hits) const;
-  /* Whether the ray hits anything with t in [0, t_max] (stops at the first hit found). */
-  bool ray_hits_any(const vec3 &origin, const vec3 &direction, float t_max) const;
+  /* Whether the ray hits anything with t in [0, t_max] (stops at the first hit found). With
+   * `r_leaf`, the hit triangle's place in the tree (for ray_hits_leaf), or -1 on a miss. */
+  bool ray_hits_any(const vec3 &origin, const vec3 &direction, float t_max,
+                    int32_t *r_leaf = nullptr) const;
+  /* Whether the ray hits the triangle at `leaf` (a ray_hits_any answer) with t in
+   * [0, t_max]: a hit it reports is a hit ray_hits_any could have found. */
+  bool ray_hits_leaf(const vec3 &origin, const vec3 &direction, float t_max, int32_t leaf) const;
   /* The hit with the largest t >= 0 (the outermost surface along a ray cast outwards).
    * False when the ray misses. */
   bool ray_farthest_hit(const vec3 &origin, const vec3 &direction, RayHit &r_hit) const;
@@ -106,11 +111,14 @@ class TriangleBVH {
   ClosestPoint closest_point(const vec3 &p, float max_distance_sq) const;
 
  private:
-  /* fn(hit) for the ray's hits with t in [0, t_max], in the tree's order, until it returns
-   * true (then true). */
+  /* fn(leaf, hit) for the ray's hits with t in [0, t_max], in the tree's order, until it
+   * returns true (then true); leaf: the triangle's place in corners_. */
   template<typename Fn>
   bool for_each_ray_hit(const vec3 &origin, const vec3 &direction, float t_max,
                         const Fn &fn) const;
+  /* The ray's hit with the triangle at `leaf` (corners_ order), t in [0, t_max]. */
+  bool hit_leaf(const vec3 &origin, const vec3 &direction, float t_max, int32_t leaf,
+                RayHit &r_hit) const;
 
   struct Node {
     vec3 min, max;

@@ -350,6 +350,10 @@ void LodSolver::select(const LodCamera &camera)
   const float margin_scale = colliders_ != nullptr && colliders_->colliders_num() > 0 ?
                                  0.01f * colliders_->size_wo() :
                                  0.0f;
+  if (occluders_.size() != size_t(nodes * occlusion_samples)) {
+    occluders_.assign(size_t(nodes * occlusion_samples), -1);
+    seen_sample_.assign(size_t(nodes), 0);
+  }
   /* §6.1: visibility first, then distance and velocity, per active hair group. */
   parallel_for(nodes, 64, [&](const IndexRange range) {
     for (int64_t node = range.start; node < range.one_after_last(); node++) {
@@ -370,13 +374,21 @@ void LodSolver::select(const LodCamera &camera)
       }
       bool visible = camera.sees_sphere(centre, bound + hierarchy_.radius(node));
       if (visible && occlusion && colliders_ != nullptr && !camera.is_orthographic()) {
-        /* Hidden when the body is in front of every sampled control point past the root. */
+        /* Hidden when the body is in front of every sampled control point past the root
+         * (the one that showed the node at the last frame first). */
         visible = false;
         const float margin = hierarchy_.radius(node) + margin_scale;
-        for (const int32_t k : {n / 4, n / 2, (3 * n) / 4, n - 1}) {
-          if (k > 0 && !hidden_by_colliders(*colliders_, camera.position_wo(), points[k], margin))
+        const int32_t samples[occlusion_samples] = {n / 4, n / 2, (3 * n) / 4, n - 1};
+        uint8_t &seen = seen_sample_[size_t(node)];
+        for (int j = 0; j < occlusion_samples; j++) {
+          const int sample = (seen + j) % occlusion_samples;
+          const int32_t k = samples[sample];
+          int64_t &occluder = occluders_[size_t(node * occlusion_samples + sample)];
+          if (k > 0 &&
+              !hidden_by_colliders(*colliders_, camera.position_wo(), points[k], margin, &occluder))
           {
             visible = true;
+            seen = uint8_t(sample);
             break;
           }
         }

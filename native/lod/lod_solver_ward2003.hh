@@ -69,6 +69,7 @@ class LodSolver {
   void set_occluders(const ColliderSet *occluders)
   {
     colliders_ = occluders;
+    occluders_.clear();
     if (!solver_->passes().is_empty()) {
       update_pass_volumes();
     }
@@ -189,6 +190,12 @@ class LodSolver {
    * (stepped by the last step, or placed since). */
   std::vector<uint8_t> active_, visible_, shown_, current_;
   std::vector<int32_t> wanted_;
+  /* Per node, select()'s memory of the last frame (the same answers, found sooner): per
+   * sampled control point the triangle that hid it (hidden_by_colliders' r_occluder), and
+   * the sample that showed the node (tested first). */
+  static constexpr int occlusion_samples = 4;
+  std::vector<int64_t> occluders_;
+  std::vector<uint8_t> seen_sample_;
   /* Per node and control point: current frames. */
   std::vector<mat3> frames_;
 

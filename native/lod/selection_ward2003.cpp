@@ -63,24 +63,48 @@ int32_t wanted_level(const float distance, const float speed, const LodParams &p
 }
 
 bool hidden_by_colliders(const ColliderSet &colliders, const vec3 &eye_wo, const vec3 &point_wo,
-                         const float margin_wo)
+                         const float margin_wo, int64_t *const r_occluder)
 {
   const float distance = glm::length(point_wo - eye_wo);
   if (distance <= margin_wo) {
     return false;
   }
   const float t_max = 1.0f - margin_wo / distance;
+  /* The ray in collider i's own space. */
+  const auto ray = [&](const Collider &collider, vec3 &r_origin, vec3 &r_direction) {
+    r_origin = transform_point(collider.world_to_object(), eye_wo);
+    r_direction = transform_point(collider.world_to_object(), point_wo) - r_origin;
+  };
+  vec3 origin, direction;
+  if (r_occluder != nullptr && *r_occluder >= 0) {
+    const int64_t i = *r_occluder >> 32;
+    if (i < colliders.colliders_num()) {
+      const Collider &collider = colliders.collider(i);
+      ray(collider, origin, direction);
+      if (collider.exact().bvh().ray_hits_leaf(origin, direction, t_max,
+                                               int32_t(*r_occluder & 0xffffffff)))
+      {
+        return true;
+      }
+    }
+  }
   for (int64_t i = 0; i < colliders.colliders_num(); i++) {
     const Collider &collider = colliders.collider(i);
     const TriangleBVH &bvh = collider.exact().bvh();
     if (bvh.is_empty()) {
       continue;
     }
-    const vec3 origin = transform_point(collider.world_to_object(), eye_wo);
-    const vec3 target = transform_point(collider.world_to_object(), point_wo);
-    if (bvh.ray_hits_any(origin, target - origin, t_max)) {
+    ray(collider, origin, direction);
+    int32_t leaf = -1;
+    if (bvh.ray_hits_any(origin, direction, t_max, &leaf)) {
+      if (r_occluder != nullptr) {
+        *r_occluder = (i << 32) | int64_t(leaf);
+      }
       return true;
     }
+  }
+  if (r_occluder != nullptr) {
+    *r_occluder = -1;
   }
   return false;
 }

@@ -42,8 +42,14 @@ int32_t wanted_level(float distance, float speed, const LodParams &params, int32
                      int32_t finest);
 
 /* True when the segment from the eye to `point_wo`, stopped `margin_wo` short of it, crosses a
- * collider's triangles (§6.1: "occluded by the body"). */
+ * collider's triangles (§6.1: "occluded by the body").
+ *
+ * `r_occluder` (optional) remembers the triangle that hid the point (collider << 32 | its
+ * place in the collider's tree; -1: none): tested first next time, a point hidden at the
+ * last frame is usually hidden by the same triangle, one ray-triangle test instead of a walk
+ * down the tree. The answer is the same either way: the remembered triangle counts only
+ * where the ray meets it now. */
 bool hidden_by_colliders(const ColliderSet &colliders, const vec3 &eye_wo, const vec3 &point_wo,
-                         float margin_wo);
+                         float margin_wo, int64_t *r_occluder = nullptr);
 
 }  // namespace hairdyn
