@@ -569,6 +569,7 @@ void LodSolver::keep_lengths(const IndexRange strands)
   scratch.indices.resize(size_t(strands.size));
   scratch.hit.resize(size_t(strands.size));
   scratch.depth.resize(size_t(strands.size));
+  const bool bodies = !rest_depths_.empty();
   for (int64_t i = 1; i < points_num; i++) {
     int64_t n = 0;
     for (int64_t strand = strands.start; strand < strands.one_after_last(); strand++) {
@@ -579,11 +580,13 @@ void LodSolver::keep_lengths(const IndexRange strands)
       const int64_t point = strand_points.start + i;
       follow(positions_wo_[size_t(point) - 1], rest_lengths_[size_t(point)],
              positions_wo_[size_t(point)]);
-      scratch.points[size_t(n)] = positions_wo_[size_t(point)];
-      scratch.indices[size_t(n++)] = point;
+      if (bodies) { /* the batch to query */
+        scratch.points[size_t(n)] = positions_wo_[size_t(point)];
+        scratch.indices[size_t(n++)] = point;
+      }
     }
-    if (rest_depths_.empty()) {
-      continue; /* no bodies */
+    if (!bodies) {
+      continue;
     }
     find_contacts_serial(*bodies_, Span<vec3>(scratch.points.data(), n),
                          MutableSpan<uint8_t>(scratch.hit.data(), n),
