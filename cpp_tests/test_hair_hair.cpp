@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <random>
 #include <set>
@@ -214,6 +215,40 @@ TEST(HairHair, MovingStrandsFindTheContactsOfTheirPairsAlone)
   }
   EXPECT_GT(together.size(), 50u);
   EXPECT_GT(crossed, 5);
+}
+
+/* Strands that move together (a character walking: here 4 cm in the substep, four
+ * segments' length) sweep their boxes in the frame of that common move, so they meet as many
+ * candidate pairs as at rest and find the same contacts; swept in the world, every box would
+ * stretch over the whole move. */
+TEST(HairHair, StrandsMovingTogetherMeetTheCandidatesOfStrandsAtRest)
+{
+  Strands strands = random_strands(40, 7, 13);
+  SweptSphereParams params;
+  params.thickness = 0.0015f;
+  const float h = 0.02f;
+  const auto find = [&](const vec3 &velocity, int64_t &r_candidates) {
+    std::fill(strands.velocities.begin(), strands.velocities.end(), velocity);
+    SegmentGridScratch scratch;
+    std::vector<SegmentContact> contacts;
+    find_segment_contacts(strands.offsets, strands.positions, {}, params.thickness, false, scratch,
+                          contacts, {}, strands.velocities, &params, h);
+    r_candidates = scratch.candidate_pairs_num;
+    return contacts;
+  };
+  int64_t at_rest = 0, moving = 0;
+  const std::vector<SegmentContact> still = find(vec3(0.0f), at_rest);
+  const std::vector<SegmentContact> walking = find(vec3(1.2f, -1.0f, 1.0f), moving);
+  std::printf("candidate pairs: %lld at rest, %lld moving together\n", (long long)at_rest,
+              (long long)moving);
+  EXPECT_LE(double(moving), 1.02 * double(at_rest));
+  ASSERT_EQ(walking.size(), still.size());
+  for (size_t i = 0; i < still.size(); i++) {
+    EXPECT_EQ(walking[i].first, still[i].first);
+    EXPECT_EQ(walking[i].second, still[i].second);
+    EXPECT_FALSE(walking[i].crossed);
+  }
+  EXPECT_GT(still.size(), 50u);
 }
 
 TEST(HairHair, PerPointRadiiSetEachSegmentsSweptSphere)

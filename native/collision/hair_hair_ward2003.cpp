@@ -253,7 +253,28 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   g.box_max.resize(size_t(segments_num));
   g.segment_cell.resize(size_t(segments_num));
 
-
+  /* The boxes are swept in the frame that moves with the nodes' mean displacement over the
+   * substep, d: two segments at any instant of the substep are as far apart in it as in the
+   * world (both shift by the same τ d), so a pair that meets during the substep has boxes that
+   * meet there too, and each segment's move there, its `sweep`, bounds how far it moved
+   * against any other. Hair that moves together (a swing, a turn) then sweeps smaller boxes:
+   * fewer candidate pairs, the same contacts. */
+  vec3 common_move(0.0f);
+  if (start.sweeps()) {
+    const glm::dvec3 sum = parallel_reduce(
+        points_num, 4096, glm::dvec3(0.0),
+        [&](const IndexRange range) {
+          glm::dvec3 s(0.0);
+          for (int64_t p = range.start; p < range.one_after_last(); p++) {
+            s += glm::dvec3(positions[p] - start[p]);
+          }
+          return s;
+        },
+        [](const glm::dvec3 &a, const glm::dvec3 &b) {
+          return a + b;
+        });
+    common_move = vec3(sum / double(points_num));
+  }
   /* Boxes of the swept segments, the mean segment length and the largest box. */
   struct Bounds {
     vec3 lo{std::numeric_limits<float>::max()}, hi{-std::numeric_limits<float>::max()};
@@ -279,9 +300,10 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
             float sweep = 0.0f;
             if (start.sweeps()) {
               const vec3 a0 = start[p], e0 = start[p + 1];
-              lo = glm::min(lo, glm::min(a0, e0));
-              hi = glm::max(hi, glm::max(a0, e0));
-              sweep = std::max(glm::length(a - a0), glm::length(e - e0));
+              const vec3 a1 = a - common_move, e1 = e - common_move;
+              lo = glm::min(glm::min(a1, e1), glm::min(a0, e0));
+              hi = glm::max(glm::max(a1, e1), glm::max(a0, e0));
+              sweep = std::max(glm::length(a1 - a0), glm::length(e1 - e0));
             }
             g.segment_sweep[k] = sweep;
             g.box_min[k] = lo - vec3(r);

@@ -54,7 +54,9 @@ struct SegmentGridScratch {
   std::vector<int32_t> point_curve; /* per point: its strand */
   /* Per segment (segment k of strand c starts at point k + c). */
   std::vector<int32_t> segment_curve;
-  std::vector<float> segment_sweep; /* m, the farthest one of its nodes moved in the substep */
+  /* m, the farthest one of its nodes moved in the substep, less the nodes' mean move (the
+   * frame its box is swept in: build_grid) */
+  std::vector<float> segment_sweep;
   std::vector<vec3> box_min, box_max; /* its swept LSS's bounding box, start and end (in `axes`) */
   std::vector<uint32_t> segment_cell; /* the column of its box's lower corner (linear index) */
   /* The grid: one entry per segment but the big ones, column by column (in linear order),
