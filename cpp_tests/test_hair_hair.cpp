@@ -9,6 +9,7 @@
 #include <random>
 #include <set>
 
+#include "collision/collider.hh"
 #include "collision/hair_hair_ward2003.hh"
 #include "core/parallel.hh"
 
@@ -359,25 +360,66 @@ TEST(HairHair, SegmentsThatCrossedDuringTheSubstepGoBackToTheirSides)
   EXPECT_NEAR(after.distance, 2.0f * r, 1e-6f);
 }
 
+/* Three passes over 400 random strands (the seed's), each swept from x − h v; the last
+ * pass's statistics in r_stats. */
+Strands three_passes(const uint32_t seed, const float h, HairHairStats *r_stats = nullptr)
+{
+  Strands strands = random_strands(400, 12, seed);
+  SweptSphereParams params;
+  params.thickness = 0.0015f;
+  SegmentGridScratch scratch;
+  std::vector<SegmentContact> contacts;
+  for (int i = 0; i < 3; i++) {
+    const HairHairStats stats = resolve_hair_hair(params, strands.state(h), scratch, contacts);
+    if (r_stats != nullptr) {
+      *r_stats = stats;
+    }
+  }
+  return strands;
+}
+
+bool same_bits(const Strands &a, const Strands &b)
+{
+  return a.positions.size() == b.positions.size() &&
+         std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(vec3)) ==
+             0 &&
+         std::memcmp(a.velocities.data(), b.velocities.data(),
+                     a.velocities.size() * sizeof(vec3)) == 0;
+}
+
 TEST(HairHair, SameBitsOnOneAndTwoThreads)
 {
   const auto run = [](const int threads) {
     set_thread_num(threads);
-    Strands strands = random_strands(400, 12, 3);
-    SweptSphereParams params;
-    params.thickness = 0.0015f;
-    SegmentGridScratch scratch;
-    std::vector<SegmentContact> contacts;
-    for (int i = 0; i < 3; i++) {
-      resolve_hair_hair(params, strands.state(), scratch, contacts);
-    }
+    const Strands strands = three_passes(3, 1e-3f);
     set_thread_num(0);
     return strands;
   };
-  const Strands one = run(1), two = run(2);
-  ASSERT_EQ(one.positions.size(), two.positions.size());
-  EXPECT_EQ(std::memcmp(one.positions.data(), two.positions.data(), one.positions.size() * sizeof(vec3)), 0);
-  EXPECT_EQ(std::memcmp(one.velocities.data(), two.velocities.data(), one.velocities.size() * sizeof(vec3)), 0);
+  EXPECT_TRUE(same_bits(run(1), run(2)));
+}
+
+TEST(HairHair, SameBitsWithAndWithoutAvx2)
+{
+  /* The sweep and cannot_touch eight entries at a time (AVX2) against four (the baseline):
+   * the same candidates, contacts and bits, on strands that move (continuous detection) and
+   * at rest. */
+  if (!collision_avx2_available()) {
+    GTEST_SKIP() << "no AVX2 on this CPU";
+  }
+  const bool was_used = collision_avx2_used();
+  for (const float h : { 0.0f, 0.02f }) {
+    SCOPED_TRACE("h " + std::to_string(h));
+    HairHairStats baseline_stats, avx2_stats;
+    set_collision_avx2(false);
+    const Strands baseline = three_passes(5, h, &baseline_stats);
+    set_collision_avx2(true);
+    const Strands avx2 = three_passes(5, h, &avx2_stats);
+    EXPECT_EQ(avx2_stats.candidates_num, baseline_stats.candidates_num);
+    EXPECT_EQ(avx2_stats.pairs_num, baseline_stats.pairs_num);
+    EXPECT_GT(baseline_stats.pairs_num, 100);
+    EXPECT_TRUE(same_bits(baseline, avx2));
+  }
+  set_collision_avx2(was_used);
 }
 
 TEST(HairHair, RepeatedPassesSeparateTwoInterpenetratingLayers)

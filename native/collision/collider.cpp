@@ -7,7 +7,7 @@
 #include <sstream>
 #include <tuple>
 
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
 #include <immintrin.h>
 #endif
 
@@ -300,10 +300,10 @@ PenetrationStats ColliderSet::penetration_stats(const Span<vec3> points_wo,
 
 namespace {
 
-/* Whether the AVX2 code runs: where the CPU has it (HAIRDYN_BLEND_AVX2 where it is built). */
+/* Whether the AVX2 code runs: where the CPU has it (HAIRDYN_COLLISION_AVX2 where it is built). */
 bool avx2_built_and_available()
 {
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
   return cpu_has_avx2();
 #else
   return false;
@@ -315,7 +315,7 @@ std::atomic<bool> use_avx2{ avx2_built_and_available() };
 using OutputSpans = std::tuple<MutableSpan<uint8_t>, MutableSpan<float>, MutableSpan<vec3>,
                                MutableSpan<vec3>>;
 
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
 /* ContactBatch::load eight points at a time: load_xyz4's shuffles on two groups of four points
  * at once (points k .. k + 3 in the low halves, k + 4 .. k + 7 in the high halves). */
 __attribute__((target("avx2"))) void load_avx2(ContactBatch<map_batch_size> &contacts,
@@ -412,7 +412,7 @@ template<bool avx2> HAIRDYN_BATCH_INLINE void find_contacts_range(
   scratch.avx2 = avx2;
   for (int64_t start = range.start; start < range.one_after_last(); start += map_batch_size) {
     const int64_t size = std::min(map_batch_size, range.one_after_last() - start);
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
     if constexpr (avx2) {
       load_avx2(contacts, points_wo.slice(start, size));
     }
@@ -423,7 +423,7 @@ template<bool avx2> HAIRDYN_BATCH_INLINE void find_contacts_range(
     }
     colliders.accumulate_contacts(contacts, scratch);
     /* A point inside nothing: depth 0, normal 0, itself (ContactBatch::set_untouched). */
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
     if constexpr (avx2) {
       store_avx2(contacts, start, std::get<0>(outputs), std::get<1>(outputs),
                  std::get<2>(outputs), std::get<3>(outputs));
@@ -439,7 +439,7 @@ template<bool avx2> HAIRDYN_BATCH_INLINE void find_contacts_range(
  * x86-64 baseline (SSE2, 4 lanes), chosen at run time by use_avx2. The same IEEE operations
  * in the same order (no FMA: -std=c++17 leaves contraction off, and target("avx2") does not
  * enable FMA), so both give the same bits; CollisionRobustness checks it. */
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
 __attribute__((target("avx2"))) void find_contacts_range_avx2(
     const ColliderSet &colliders, const Span<vec3> points_wo, const IndexRange range,
     ContactBatch<map_batch_size> &contacts, MapBatch<map_batch_size> &scratch,
@@ -481,7 +481,7 @@ void find_contacts_serial(const ColliderSet &colliders, const Span<vec3> points_
 {
   const OutputSpans outputs{ r_hit, r_depth, r_normal_wo, r_surface_point_wo };
   const IndexRange range{ 0, points_wo.size() };
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
   if (use_avx2) {
     find_contacts_range_avx2(colliders, points_wo, range, contacts, scratch, outputs);
     return;

@@ -456,9 +456,9 @@ class ColliderSet {
   std::vector<std::shared_ptr<Collider>> colliders_;
 };
 
-/* Whether find_contacts runs its AVX2 code: by default where the CPU has AVX2. Turning it off
- * runs the baseline (SSE2) code, for the test that both give the same bits; not to be changed
- * while a query runs. */
+/* Whether find_contacts and the hair–hair pass run their AVX2 code: by default where the CPU
+ * has AVX2. Turning it off runs the baseline (SSE2) code, for the tests that both give the same
+ * bits; not to be changed while a query runs. */
 bool collision_avx2_available();
 void set_collision_avx2(bool enabled);
 bool collision_avx2_used();

@@ -9,8 +9,12 @@
 #  include <emmintrin.h>
 #endif
 
+#include "collision/collider.hh"
 #include "core/head_motion.hh"
 #include "core/parallel.hh"
+#if defined(HAIRDYN_COLLISION_AVX2)
+#include <immintrin.h>
+#endif
 
 namespace hairdyn {
 
@@ -105,97 +109,173 @@ inline bool cannot_touch(const SegmentGridScratch::Segment &a,
 }
 
 #if defined(__SSE2__)
-/* cannot_touch of segment a against four segments at once (the same arithmetic, four lanes):
- * bit i of the result set when the pair with b[i] is rejected. */
-inline int cannot_touch4(const SegmentGridScratch::Segment &a,
-                         const SegmentGridScratch::Segment *const b[4], const float sin_parallel2,
-                         const bool sweeps)
-{
-  /* The four segments' `field`, one lane each: x, y, z and w in four registers. */
-  const auto rows = [&](vec4 SegmentGridScratch::Segment::*const field, __m128 &x, __m128 &y,
-                        __m128 &z, __m128 &w) {
+/* The vector operations the lane code below is written in, four lanes (SSE2) or, where the
+ * collision code's AVX2 forms run, eight (AVX2). Each lane does what the scalar code does, in
+ * the same order (no FMA), so four and eight lanes give the same bits. */
+#define HAIRDYN_LANES_FN [[gnu::always_inline]] static inline
+struct Lanes4 {
+  using V = __m128;
+  static constexpr int width = 4;
+  HAIRDYN_LANES_FN V set(const float v) { return _mm_set1_ps(v); }
+  HAIRDYN_LANES_FN V zero() { return _mm_setzero_ps(); }
+  HAIRDYN_LANES_FN V load(const float *p) { return _mm_loadu_ps(p); }
+  HAIRDYN_LANES_FN V add(const V p, const V q) { return _mm_add_ps(p, q); }
+  HAIRDYN_LANES_FN V sub(const V p, const V q) { return _mm_sub_ps(p, q); }
+  HAIRDYN_LANES_FN V mul(const V p, const V q) { return _mm_mul_ps(p, q); }
+  HAIRDYN_LANES_FN V div(const V p, const V q) { return _mm_div_ps(p, q); }
+  HAIRDYN_LANES_FN V min(const V p, const V q) { return _mm_min_ps(p, q); }
+  HAIRDYN_LANES_FN V max(const V p, const V q) { return _mm_max_ps(p, q); }
+  HAIRDYN_LANES_FN V gt(const V p, const V q) { return _mm_cmpgt_ps(p, q); }
+  HAIRDYN_LANES_FN V lt(const V p, const V q) { return _mm_cmplt_ps(p, q); }
+  HAIRDYN_LANES_FN V ge(const V p, const V q) { return _mm_cmpge_ps(p, q); }
+  HAIRDYN_LANES_FN V le(const V p, const V q) { return _mm_cmple_ps(p, q); }
+  HAIRDYN_LANES_FN V and_(const V p, const V q) { return _mm_and_ps(p, q); }
+  HAIRDYN_LANES_FN V or_(const V p, const V q) { return _mm_or_ps(p, q); }
+  HAIRDYN_LANES_FN V xor_(const V p, const V q) { return _mm_xor_ps(p, q); }
+  HAIRDYN_LANES_FN V andnot(const V p, const V q) { return _mm_andnot_ps(p, q); }
+  HAIRDYN_LANES_FN int mask(const V p) { return _mm_movemask_ps(p); }
+  HAIRDYN_LANES_FN V dot(const V px, const V py, const V pz, const V qx, const V qy, const V qz)
+  {
+    return add(add(mul(px, qx), mul(py, qy)), mul(pz, qz));
+  }
+  /* The segments' `field`, one lane each: x, y, z and w in four registers. */
+  HAIRDYN_LANES_FN void rows(const SegmentGridScratch::Segment *const b[],
+                             vec4 SegmentGridScratch::Segment::*const field, V &x, V &y, V &z,
+                             V &w)
+  {
     x = _mm_loadu_ps(&(b[0]->*field).x);
     y = _mm_loadu_ps(&(b[1]->*field).x);
     z = _mm_loadu_ps(&(b[2]->*field).x);
     w = _mm_loadu_ps(&(b[3]->*field).x);
     _MM_TRANSPOSE4_PS(x, y, z, w);
-  };
-  const auto set = [](const float v) { return _mm_set1_ps(v); };
-  const auto add = [](const __m128 p, const __m128 q) { return _mm_add_ps(p, q); };
-  const auto sub = [](const __m128 p, const __m128 q) { return _mm_sub_ps(p, q); };
-  const auto mul = [](const __m128 p, const __m128 q) { return _mm_mul_ps(p, q); };
-  const auto dot = [&](const __m128 px, const __m128 py, const __m128 pz, const __m128 qx,
-                       const __m128 qy, const __m128 qz) {
+  }
+};
+#if defined(HAIRDYN_COLLISION_AVX2)
+#define HAIRDYN_LANES8_FN __attribute__((target("avx2"))) static inline
+struct Lanes8 {
+  using V = __m256;
+  static constexpr int width = 8;
+  HAIRDYN_LANES8_FN V set(const float v) { return _mm256_set1_ps(v); }
+  HAIRDYN_LANES8_FN V zero() { return _mm256_setzero_ps(); }
+  HAIRDYN_LANES8_FN V load(const float *p) { return _mm256_loadu_ps(p); }
+  HAIRDYN_LANES8_FN V add(const V p, const V q) { return _mm256_add_ps(p, q); }
+  HAIRDYN_LANES8_FN V sub(const V p, const V q) { return _mm256_sub_ps(p, q); }
+  HAIRDYN_LANES8_FN V mul(const V p, const V q) { return _mm256_mul_ps(p, q); }
+  HAIRDYN_LANES8_FN V div(const V p, const V q) { return _mm256_div_ps(p, q); }
+  HAIRDYN_LANES8_FN V min(const V p, const V q) { return _mm256_min_ps(p, q); }
+  HAIRDYN_LANES8_FN V max(const V p, const V q) { return _mm256_max_ps(p, q); }
+  HAIRDYN_LANES8_FN V gt(const V p, const V q) { return _mm256_cmp_ps(p, q, _CMP_GT_OS); }
+  HAIRDYN_LANES8_FN V lt(const V p, const V q) { return _mm256_cmp_ps(p, q, _CMP_LT_OS); }
+  HAIRDYN_LANES8_FN V ge(const V p, const V q) { return _mm256_cmp_ps(p, q, _CMP_GE_OS); }
+  HAIRDYN_LANES8_FN V le(const V p, const V q) { return _mm256_cmp_ps(p, q, _CMP_LE_OS); }
+  HAIRDYN_LANES8_FN V and_(const V p, const V q) { return _mm256_and_ps(p, q); }
+  HAIRDYN_LANES8_FN V or_(const V p, const V q) { return _mm256_or_ps(p, q); }
+  HAIRDYN_LANES8_FN V xor_(const V p, const V q) { return _mm256_xor_ps(p, q); }
+  HAIRDYN_LANES8_FN V andnot(const V p, const V q) { return _mm256_andnot_ps(p, q); }
+  HAIRDYN_LANES8_FN int mask(const V p) { return _mm256_movemask_ps(p); }
+  HAIRDYN_LANES8_FN V dot(const V px, const V py, const V pz, const V qx, const V qy, const V qz)
+  {
     return add(add(mul(px, qx), mul(py, qy)), mul(pz, qz));
-  };
-  __m128 ox, oy, oz, radius, dx, dy, dz, dd;
-  rows(&SegmentGridScratch::Segment::origin, ox, oy, oz, radius);
-  rows(&SegmentGridScratch::Segment::tip, dx, dy, dz, dd);
-  dx = _mm_sub_ps(dx, ox);
-  dy = _mm_sub_ps(dy, oy);
-  dz = _mm_sub_ps(dz, oz);
+  }
+  /* Segments k and k + 4 share a 128-bit half's transpose. */
+  HAIRDYN_LANES8_FN void rows(const SegmentGridScratch::Segment *const b[],
+                              vec4 SegmentGridScratch::Segment::*const field, V &x, V &y, V &z,
+                              V &w)
+  {
+    V r[4];
+    for (int k = 0; k < 4; k++) {
+      r[k] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(&(b[k]->*field).x)),
+                                  _mm_loadu_ps(&(b[k + 4]->*field).x), 1);
+    }
+    const V t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+    const V t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+    x = _mm256_shuffle_ps(t0, t2, 0x44);
+    y = _mm256_shuffle_ps(t0, t2, 0xEE);
+    z = _mm256_shuffle_ps(t1, t3, 0x44);
+    w = _mm256_shuffle_ps(t1, t3, 0xEE);
+  }
+};
+#endif
+
+/* The lane templates below are compiled only inside their vector code's wrapper (flatten, at
+ * the end), never as functions of their own: the eight-lane values never cross a call. */
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+/* cannot_touch of segment a against L::width segments at once (the same arithmetic, a lane
+ * each): bit i of the result set when the pair with b[i] is rejected. */
+template<class L> [[gnu::always_inline]] inline int cannot_touch_lanes(
+    const SegmentGridScratch::Segment &a, const SegmentGridScratch::Segment *const b[],
+    const float sin_parallel2, const bool sweeps)
+{
+  using V = typename L::V;
+  V ox, oy, oz, radius, dx, dy, dz, dd;
+  L::rows(b, &SegmentGridScratch::Segment::origin, ox, oy, oz, radius);
+  L::rows(b, &SegmentGridScratch::Segment::tip, dx, dy, dz, dd);
+  dx = L::sub(dx, ox);
+  dy = L::sub(dy, oy);
+  dz = L::sub(dz, oz);
   const vec3 da = vec3(a.tip) - vec3(a.origin);
-  const __m128 ax = set(da.x), ay = set(da.y), az = set(da.z);
-  const __m128 nx = sub(mul(ay, dz), mul(az, dy)), ny = sub(mul(az, dx), mul(ax, dz)),
-               nz = sub(mul(ax, dy), mul(ay, dx));
-  const __m128 nn1 = dot(nx, ny, nz, nx, ny, nz);
-  const __m128 parallel_limit = mul(set(sin_parallel2), mul(set(a.tip.w), dd));
-  const __m128 radii_sum = mul(set(1.001f), add(set(a.origin.w), radius));
-  const __m128 radii2 = mul(radii_sum, radii_sum);
-  const __m128 wx = sub(ox, set(a.origin.x)), wy = sub(oy, set(a.origin.y)),
-               wz = sub(oz, set(a.origin.z));
-  const __m128 zero = _mm_setzero_ps();
+  const V ax = L::set(da.x), ay = L::set(da.y), az = L::set(da.z);
+  const V nx = L::sub(L::mul(ay, dz), L::mul(az, dy)), ny = L::sub(L::mul(az, dx), L::mul(ax, dz)),
+          nz = L::sub(L::mul(ax, dy), L::mul(ay, dx));
+  const V nn1 = L::dot(nx, ny, nz, nx, ny, nz);
+  const V parallel_limit = L::mul(L::set(sin_parallel2), L::mul(L::set(a.tip.w), dd));
+  const V radii_sum = L::mul(L::set(1.001f), L::add(L::set(a.origin.w), radius));
+  const V radii2 = L::mul(radii_sum, radii_sum);
+  const V wx = L::sub(ox, L::set(a.origin.x)), wy = L::sub(oy, L::set(a.origin.y)),
+          wz = L::sub(oz, L::set(a.origin.z));
+  const V zero = L::zero();
   /* Not near parallel. */
-  const __m128 not_parallel = _mm_cmpgt_ps(nn1, mul(set(1.001f), parallel_limit));
-  const __m128 f1 = dot(wx, wy, wz, nx, ny, nz);
-  const __m128 lines_apart = _mm_cmpgt_ps(mul(f1, f1), mul(radii2, nn1));
-  __m128 reject = _mm_and_ps(not_parallel, lines_apart);
+  const V not_parallel = L::gt(nn1, L::mul(L::set(1.001f), parallel_limit));
+  const V f1 = L::dot(wx, wy, wz, nx, ny, nz);
+  const V lines_apart = L::gt(L::mul(f1, f1), L::mul(radii2, nn1));
+  V reject = L::and_(not_parallel, lines_apart);
   if (sweeps) {
-    __m128 sx, sy, sz, unused, tx, ty, tz;
-    rows(&SegmentGridScratch::Segment::start_origin, sx, sy, sz, unused);
-    rows(&SegmentGridScratch::Segment::start_tip, tx, ty, tz, unused);
-    tx = sub(tx, sx);
-    ty = sub(ty, sy);
-    tz = sub(tz, sz);
+    V sx, sy, sz, unused, tx, ty, tz;
+    L::rows(b, &SegmentGridScratch::Segment::start_origin, sx, sy, sz, unused);
+    L::rows(b, &SegmentGridScratch::Segment::start_tip, tx, ty, tz, unused);
+    tx = L::sub(tx, sx);
+    ty = L::sub(ty, sy);
+    tz = L::sub(tz, sz);
     const vec3 start_da = vec3(a.start_tip) - vec3(a.start_origin);
-    const __m128 bx = set(start_da.x), by = set(start_da.y), bz = set(start_da.z);
-    const __m128 mx = sub(mul(by, tz), mul(bz, ty)), my = sub(mul(bz, tx), mul(bx, tz)),
-                 mz = sub(mul(bx, ty), mul(by, tx));
-    const __m128 vx = sub(sx, set(a.start_origin.x)), vy = sub(sy, set(a.start_origin.y)),
-                 vz = sub(sz, set(a.start_origin.z));
-    const __m128 side0 = dot(vx, vy, vz, mx, my, mz);
-    const __m128 same_sign = _mm_xor_ps(_mm_cmpgt_ps(side0, zero), _mm_cmpgt_ps(f1, zero));
-    const __m128 clear = _mm_cmpgt_ps(
-        mul(side0, side0),
-        mul(set(1e-8f), mul(dot(vx, vy, vz, vx, vy, vz), dot(mx, my, mz, mx, my, mz))));
-    reject = _mm_and_ps(reject, _mm_andnot_ps(same_sign, clear));
+    const V bx = L::set(start_da.x), by = L::set(start_da.y), bz = L::set(start_da.z);
+    const V mx = L::sub(L::mul(by, tz), L::mul(bz, ty)),
+            my = L::sub(L::mul(bz, tx), L::mul(bx, tz)),
+            mz = L::sub(L::mul(bx, ty), L::mul(by, tx));
+    const V vx = L::sub(sx, L::set(a.start_origin.x)), vy = L::sub(sy, L::set(a.start_origin.y)),
+            vz = L::sub(sz, L::set(a.start_origin.z));
+    const V side0 = L::dot(vx, vy, vz, mx, my, mz);
+    const V same_sign = L::xor_(L::gt(side0, zero), L::gt(f1, zero));
+    const V clear =
+        L::gt(L::mul(side0, side0), L::mul(L::set(1e-8f), L::mul(L::dot(vx, vy, vz, vx, vy, vz),
+                                                                 L::dot(mx, my, mz, mx, my, mz))));
+    reject = L::and_(reject, L::andnot(same_sign, clear));
   }
   /* Near parallel. */
   if (a.tip.w > 0.0f) {
-    const __m128 parallel = _mm_cmplt_ps(nn1, mul(set(0.999f), parallel_limit));
-    const __m128 aa = set(a.tip.w);
-    const __m128 s0 = _mm_div_ps(dot(wx, wy, wz, ax, ay, az), aa);
-    const __m128 w1x = add(wx, dx), w1y = add(wy, dy), w1z = add(wz, dz);
-    const __m128 s1 = _mm_div_ps(dot(w1x, w1y, w1z, ax, ay, az), aa);
-    const __m128 q0x = sub(wx, mul(s0, ax)), q0y = sub(wy, mul(s0, ay)), q0z = sub(wz, mul(s0, az));
-    const __m128 q1x = sub(w1x, mul(s1, ax)), q1y = sub(w1y, mul(s1, ay)),
-                 q1z = sub(w1z, mul(s1, az));
-    const __m128 qx = sub(q1x, q0x), qy = sub(q1y, q0y), qz = sub(q1z, q0z);
-    const __m128 qq = dot(qx, qy, qz, qx, qy, qz);
-    const __m128 u = _mm_and_ps(
-        _mm_cmpgt_ps(qq, zero),
-        _mm_min_ps(_mm_max_ps(_mm_div_ps(_mm_sub_ps(zero, dot(q0x, q0y, q0z, qx, qy, qz)), qq),
-                              zero),
-                   set(1.0f)));
-    const __m128 cx = add(q0x, mul(u, qx)), cy = add(q0y, mul(u, qy)), cz = add(q0z, mul(u, qz));
-    const __m128 apart = _mm_cmpge_ps(dot(cx, cy, cz, cx, cy, cz), radii2);
-    reject = _mm_or_ps(reject, _mm_and_ps(parallel, apart));
+    const V parallel = L::lt(nn1, L::mul(L::set(0.999f), parallel_limit));
+    const V aa = L::set(a.tip.w);
+    const V s0 = L::div(L::dot(wx, wy, wz, ax, ay, az), aa);
+    const V w1x = L::add(wx, dx), w1y = L::add(wy, dy), w1z = L::add(wz, dz);
+    const V s1 = L::div(L::dot(w1x, w1y, w1z, ax, ay, az), aa);
+    const V q0x = L::sub(wx, L::mul(s0, ax)), q0y = L::sub(wy, L::mul(s0, ay)),
+            q0z = L::sub(wz, L::mul(s0, az));
+    const V q1x = L::sub(w1x, L::mul(s1, ax)), q1y = L::sub(w1y, L::mul(s1, ay)),
+            q1z = L::sub(w1z, L::mul(s1, az));
+    const V qx = L::sub(q1x, q0x), qy = L::sub(q1y, q0y), qz = L::sub(q1z, q0z);
+    const V qq = L::dot(qx, qy, qz, qx, qy, qz);
+    const V u =
+        L::and_(L::gt(qq, zero),
+                L::min(L::max(L::div(L::sub(zero, L::dot(q0x, q0y, q0z, qx, qy, qz)), qq), zero),
+                       L::set(1.0f)));
+    const V cx = L::add(q0x, L::mul(u, qx)), cy = L::add(q0y, L::mul(u, qy)),
+            cz = L::add(q0z, L::mul(u, qz));
+    const V apart = L::ge(L::dot(cx, cy, cz, cx, cy, cz), radii2);
+    reject = L::or_(reject, L::and_(parallel, apart));
   }
-  return _mm_movemask_ps(reject);
+  return L::mask(reject);
 }
-#endif
 
-#if defined(__SSE2__)
 /* Per 4-bit mask of lanes: its set lanes in order (the rest 0), and how many there are. */
 struct LaneOrder {
   alignas(16) int32_t lanes[16][4];
@@ -216,6 +296,115 @@ constexpr LaneOrder make_lane_order()
   return order;
 }
 constexpr LaneOrder lane_order = make_lane_order();
+
+/* The grid's arrays along and across its columns, as the sweep reads them. */
+struct ColumnArrays {
+  const float *lo_x, *lo_y, *lo_z, *neg_hi_y, *neg_hi_z;
+  const int32_t *entry_point;
+};
+
+/* L::width entries from `first` against e's box (hi along, then hi y, hi z, −lo y, −lo z
+ * across, each in all lanes): those that start before e's end, within the column (`lanes`),
+ * and whose boxes meet e's across, appended to the hits (L::width written, the hits counted).
+ * Returns whether all of them start before e's end. */
+template<class L> [[gnu::always_inline]] inline bool sweep_block(const ColumnArrays &a,
+                                                                 const typename L::V e_box[5],
+                                                                 const uint32_t first,
+                                                                 const int lanes, uint32_t *hits,
+                                                                 size_t &hits_num)
+{
+  using V = typename L::V;
+  const V along = L::le(L::load(a.lo_x + first), e_box[0]);
+  const V meet = L::and_(
+      L::and_(L::le(L::load(a.lo_y + first), e_box[1]), L::le(L::load(a.lo_z + first), e_box[2])),
+      L::and_(L::le(L::load(a.neg_hi_y + first), e_box[3]),
+              L::le(L::load(a.neg_hi_z + first), e_box[4])));
+  const int hit_bits = L::mask(L::and_(along, meet)) & lanes;
+  for (int half = 0; half < L::width; half += 4) {
+    const int bits = (hit_bits >> half) & 15;
+    _mm_storeu_si128(
+        reinterpret_cast<__m128i *>(hits + hits_num),
+        _mm_add_epi32(_mm_set1_epi32(int32_t(first) + half),
+                      _mm_load_si128(reinterpret_cast<const __m128i *>(lane_order.lanes[bits]))));
+    hits_num += lane_order.count[bits];
+  }
+  return L::mask(along) == (1 << L::width) - 1;
+}
+
+/* The sweep of one entry (e's lower end `lo` along the columns and its first point, for the
+ * order of ties; its box: hi along, then hi y, hi z, −lo y, −lo z across) over the columns
+ * n = 3 dz + dy (dz < n_z, dy < n_y), each from next[n] (moved past the entries that start
+ * before e) to stop[n], L::width entries at a time without a branch per entry: the entries
+ * that start before e's end (a column is sorted: the first ones) and whose boxes meet e's
+ * across. Their indices go to `hits` in order (a block writes L::width whatever it keeps:
+ * `hits` grows to leave room); returns how many. */
+template<class L> [[gnu::always_inline]] inline size_t sweep_entry_lanes(
+    const ColumnArrays &a, const float lo, const int32_t point, const float box[5],
+    uint32_t next[9], const uint32_t stop[9], const int n_y, const int n_z,
+    std::vector<uint32_t> &hits)
+{
+  using V = typename L::V;
+  constexpr int w = L::width, all = (1 << w) - 1;
+  const V e_box[5] = { L::set(box[0]), L::set(box[1]), L::set(box[2]), L::set(box[3]),
+                       L::set(box[4]) };
+  size_t hits_num = 0;
+  for (int dz = 0; dz < n_z; dz++) {
+    for (int dy = 0; dy < n_y; dy++) {
+      const int n = dz * 3 + dy;
+      uint32_t f = next[n];
+      const uint32_t f_stop = stop[n];
+      while (f < f_stop && (a.lo_x[f] < lo || (a.lo_x[f] == lo && a.entry_point[f] <= point))) {
+        f++;
+      }
+      next[n] = f;
+      if (hits.size() < hits_num + (f_stop - f) + w) {
+        hits.resize(2 * (hits_num + (f_stop - f) + w));
+      }
+      for (; f + w <= f_stop; f += w) {
+        if (!sweep_block<L>(a, e_box, f, all, hits.data(), hits_num)) {
+          break;
+        }
+      }
+      if (f < f_stop && f + w > f_stop) {
+        sweep_block<L>(a, e_box, f, (1 << (f_stop - f)) - 1, hits.data(), hits_num);
+      }
+    }
+  }
+  return hits_num;
+}
+
+#pragma GCC diagnostic pop
+
+/* The baseline code's four lanes and the AVX2 code's eight, compiled each for its own. */
+inline int cannot_touch4(const SegmentGridScratch::Segment &a,
+                         const SegmentGridScratch::Segment *const b[4], const float sin_parallel2,
+                         const bool sweeps)
+{
+  return cannot_touch_lanes<Lanes4>(a, b, sin_parallel2, sweeps);
+}
+inline size_t sweep_entry4(const ColumnArrays &a, const float lo, const int32_t point,
+                           const float box[5], uint32_t next[9], const uint32_t stop[9],
+                           const int n_y, const int n_z, std::vector<uint32_t> &hits)
+{
+  return sweep_entry_lanes<Lanes4>(a, lo, point, box, next, stop, n_y, n_z, hits);
+}
+#if defined(HAIRDYN_COLLISION_AVX2)
+__attribute__((target("avx2"), flatten)) int cannot_touch8(
+    const SegmentGridScratch::Segment &a, const SegmentGridScratch::Segment *const b[8],
+    const float sin_parallel2, const bool sweeps)
+{
+  return cannot_touch_lanes<Lanes8>(a, b, sin_parallel2, sweeps);
+}
+__attribute__((target("avx2"), flatten)) size_t sweep_entry8(const ColumnArrays &a, const float lo,
+                                                             const int32_t point,
+                                                             const float box[5], uint32_t next[9],
+                                                             const uint32_t stop[9], const int n_y,
+                                                             const int n_z,
+                                                             std::vector<uint32_t> &hits)
+{
+  return sweep_entry_lanes<Lanes8>(a, lo, point, box, next, stop, n_y, n_z, hits);
+}
+#endif
 #endif
 
 /* The grid cell holding p (clamped to the grid). */
@@ -446,8 +635,8 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
   });
   g.hi_x.resize(entries_num);
   for (std::vector<float> *values : {&g.lo_x, &g.lo_y, &g.lo_z, &g.neg_hi_y, &g.neg_hi_z}) {
-    values->resize(entries_num + 3);
-    std::fill(values->end() - 3, values->end(), 0.0f); /* the padding: loaded, never a hit */
+    values->resize(entries_num + 7);
+    std::fill(values->end() - 7, values->end(), 0.0f); /* the padding: loaded, never a hit */
   }
   g.entry_segments.resize(entries_num);
   g.entry_point.resize(entries_num);
@@ -989,12 +1178,15 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
   const int64_t big_num = int64_t(g.big_segments.size());
   const float sin_parallel2 = ctx.sin_parallel * ctx.sin_parallel;
   const bool sweeps = ctx.start.sweeps();
+  /* The sweep and cannot_touch take eight entries at a time where the AVX2 code runs, else
+   * four. */
+  const size_t block_lanes = collision_avx2_used() ? 8 : 4;
   const float *lo_x = g.lo_x.data(), *hi_x = g.hi_x.data();
-#if defined(__SSE2__)
-  const float *lo_y = g.lo_y.data(), *lo_z = g.lo_z.data(), *neg_hi_y = g.neg_hi_y.data(),
-              *neg_hi_z = g.neg_hi_z.data();
-#endif
   const SegmentGridScratch::Segment *segments = g.entry_segments.data();
+#if defined(__SSE2__)
+  const ColumnArrays columns{ g.lo_x.data(),     g.lo_y.data(),     g.lo_z.data(),
+                              g.neg_hi_y.data(), g.neg_hi_z.data(), g.entry_point.data() };
+#endif
   const int32_t *entry_point = g.entry_point.data(), *entry_curve = g.entry_curve.data();
   const float *entry_sweep = g.entry_sweep.data();
   const uint8_t *entry_strip = g.entry_strip.empty() ? nullptr : g.entry_strip.data();
@@ -1024,7 +1216,8 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
       [&](const IndexRange chunks) {
         int64_t tested = 0;
 #if defined(__SSE2__)
-        /* An entry's box hits (entries), gathered first and then tested four at a time. */
+        /* An entry's box hits (entries), gathered first and then tested four (or eight) at a
+         * time. */
         std::vector<uint32_t> hits(1024);
 #endif
         for (int64_t chunk = chunks.start; chunk < chunks.one_after_last(); chunk++) {
@@ -1090,13 +1283,18 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                                           dims);
               const int n_y = reach.y > y ? 3 : 2, n_z = reach.z > z ? 3 : 2;
 #if defined(__SSE2__)
-              const __m128 e_hi = _mm_set1_ps(hi), e_hi_y = _mm_set1_ps(cross.x),
-                           e_hi_z = _mm_set1_ps(cross.y), e_neg_lo_y = _mm_set1_ps(cross.z),
-                           e_neg_lo_z = _mm_set1_ps(cross.w);
-              size_t hits_num = 0;
+              const float box[5] = { hi, cross.x, cross.y, cross.z, cross.w };
+#if defined(HAIRDYN_COLLISION_AVX2)
+              const size_t hits_num =
+                  block_lanes == 8
+                      ? sweep_entry8(columns, lo, point, box, next, stop, n_y, n_z, hits)
+                      : sweep_entry4(columns, lo, point, box, next, stop, n_y, n_z, hits);
+#else
+              const size_t hits_num =
+                  sweep_entry4(columns, lo, point, box, next, stop, n_y, n_z, hits);
+#endif
 #else
               const SegmentGridScratch::Segment &segment = segments[e];
-#endif
               for (int dz = 0; dz < n_z; dz++) {
                 for (int dy = 0; dy < n_y; dy++) {
                   const int n = dz * 3 + dy;
@@ -1107,42 +1305,6 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                     f++;
                   }
                   next[n] = f;
-#if defined(__SSE2__)
-                  /* Room for every entry left in the column, and four more (a block writes
-                   * four whatever it keeps). */
-                  if (hits.size() < hits_num + (f_stop - f) + 4) {
-                    hits.resize(2 * (hits_num + (f_stop - f) + 4));
-                  }
-                  /* Four entries at a time, without a branch per entry: the lanes that start
-                   * before e's end (the column is sorted: the first ones), within the column
-                   * (`lanes`), and whose boxes meet e's across, appended to the hits (four
-                   * written, the hits counted). Returns whether all four start before e's
-                   * end. */
-                  const auto block = [&](const uint32_t first, const int lanes) {
-                    const __m128 along = _mm_cmple_ps(_mm_loadu_ps(lo_x + first), e_hi);
-                    const __m128 meet = _mm_and_ps(
-                        _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(lo_y + first), e_hi_y),
-                                   _mm_cmple_ps(_mm_loadu_ps(lo_z + first), e_hi_z)),
-                        _mm_and_ps(_mm_cmple_ps(_mm_loadu_ps(neg_hi_y + first), e_neg_lo_y),
-                                   _mm_cmple_ps(_mm_loadu_ps(neg_hi_z + first), e_neg_lo_z)));
-                    const int hit_bits = _mm_movemask_ps(_mm_and_ps(along, meet)) & lanes;
-                    _mm_storeu_si128(
-                        reinterpret_cast<__m128i *>(hits.data() + hits_num),
-                        _mm_add_epi32(_mm_set1_epi32(int32_t(first)),
-                                      _mm_load_si128(reinterpret_cast<const __m128i *>(
-                                          lane_order.lanes[hit_bits]))));
-                    hits_num += lane_order.count[hit_bits];
-                    return _mm_movemask_ps(along) == 15;
-                  };
-                  for (; f + 4 <= f_stop; f += 4) {
-                    if (!block(f, 15)) {
-                      break;
-                    }
-                  }
-                  if (f < f_stop && f + 4 > f_stop) {
-                    block(f, (1 << (f_stop - f)) - 1);
-                  }
-#else
                   for (; f < f_stop && lo_x[f] <= hi; f++) {
                     if (boxes_meet(g, f, cross)) {
                       const bool strip =
@@ -1153,17 +1315,28 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                           out);
                     }
                   }
-#endif
                 }
               }
+#endif
 #if defined(__SSE2__)
-              /* e's hits: all counted, cannot_touch's rejections four at a time, the exact
+              /* e's hits: all counted, cannot_touch's rejections four (eight) at a time, the exact
                * test for the few kept. */
-              for (size_t i = 0; i < hits_num; i += 4) {
-                const int n = int(std::min<size_t>(hits_num - i, 4));
+              for (size_t i = 0; i < hits_num; i += block_lanes) {
+                const int n = int(std::min<size_t>(hits_num - i, block_lanes));
                 const uint32_t *const four = hits.data() + i;
                 int rejected = 0;
-                if (n == 4) {
+#if defined(HAIRDYN_COLLISION_AVX2)
+                if (n == 8) {
+                  const SegmentGridScratch::Segment *const b[8] = {
+                    &segments[four[0]], &segments[four[1]], &segments[four[2]], &segments[four[3]],
+                    &segments[four[4]], &segments[four[5]], &segments[four[6]], &segments[four[7]]
+                  };
+                  rejected = cannot_touch8(segments[e], b, sin_parallel2, sweeps);
+                }
+                else
+#endif
+                    if (n == 4)
+                {
                   const SegmentGridScratch::Segment *const b[4] = {
                       &segments[four[0]], &segments[four[1]], &segments[four[2]],
                       &segments[four[3]]};

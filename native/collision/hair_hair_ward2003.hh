@@ -64,7 +64,7 @@ struct SegmentGridScratch {
    * the axes `axes` (x: the sweep axis along the columns, y and z across them). */
   std::vector<float> lo_x, hi_x; /* its box along the sweep axis */
   /* And across it, the upper ends negated (every test one ≤), each array apart so that four
-   * entries load at once (all five padded by three at the end). */
+   * entries load at once, or eight with AVX2 (all five padded by seven at the end). */
   std::vector<float> lo_y, lo_z, neg_hi_y, neg_hi_z;
   struct Segment {
     vec4 origin;       /* its first node at the end of the substep, and its LSS radius */

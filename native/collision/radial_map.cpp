@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
 #include <immintrin.h>
 #endif
 
@@ -183,7 +183,7 @@ void fill_cell_from_ray(const TriangleBVH &bvh, const Span<vec3> vertices,
   r_cell.radius = radius;
 }
 
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
 namespace {
 
 /* The cells at float offsets lo and hi of `cells` as the low and high halves of one vector. */

@@ -57,10 +57,11 @@ struct MapSample {
  * next to a default table (40 × 40 cells, 26 KB). */
 constexpr int64_t map_batch_size = 128;
 
-/* The batched look-up's gather has an AVX2 form (RadialTable::blend_avx2), compiled for AVX2
- * on its own and called only where MapBatch::avx2 says the CPU has it. */
+/* The collision code's AVX2 forms (the batched look-up's gather, RadialTable::blend_avx2; the
+ * hair–hair pass's sweep and filter), compiled for AVX2 on their own and run only where the
+ * CPU has it (collision_avx2_used). */
 #if defined(__GNUC__) && defined(__x86_64__)
-#define HAIRDYN_BLEND_AVX2 1
+#define HAIRDYN_COLLISION_AVX2 1
 #endif
 
 /* A batch of map look-ups as a structure of arrays, so that each stage of the look-up is one
@@ -97,7 +98,7 @@ template<int64_t N> struct MapBatch {
   int64_t packed_points = 0, packed_slots = 0;
 };
 
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
 /* compact_defined's loop eight points at a time (left-packed by a permutation), from point
  * r_k and slot r_n on: advances both past the last whole group of eight. */
 __attribute__((target("avx2"))) void compact_defined_avx2(MapBatch<map_batch_size> &b,
@@ -126,7 +127,7 @@ template<int64_t N> HAIRDYN_BATCH_INLINE bool compact_defined(MapBatch<N> &b)
   /* Forward, in place: slot n <= k has been read by the time it is written. Branch-free:
    * every point is written, and n moves on only past a defined one. */
   int64_t n = 0, k = 0;
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
   if constexpr (N == map_batch_size) {
     if (b.avx2) {
       compact_defined_avx2(b, n, k);
@@ -165,7 +166,7 @@ template<int64_t N> HAIRDYN_BATCH_INLINE void expand_defined(MapBatch<N> &b)
   /* With AVX2, the slots and points compact_defined_avx2 packed are moved back by
    * expand_defined_avx2 (which writes valid and inside of all its points). */
   int64_t j_end = 0, k_start = 0;
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
   if constexpr (N == map_batch_size) {
     j_end = b.avx2 ? b.packed_slots : 0;
     k_start = b.avx2 ? b.packed_points : 0;
@@ -193,7 +194,7 @@ template<int64_t N> HAIRDYN_BATCH_INLINE void expand_defined(MapBatch<N> &b)
     b.y[k] = b.y[j];
     b.z[k] = b.z[j];
   }
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
   if constexpr (N == map_batch_size) {
     if (b.avx2) {
       expand_defined_avx2(b);
@@ -316,7 +317,7 @@ class RadialTable {
     const float *cells = reinterpret_cast<const float *>(cells_.data());
     const float *cells_next_v = cells + next_v();
     int64_t k = 0;
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
     if constexpr (N == map_batch_size) {
       if (b.avx2) {
         k = blend_avx2(b);
@@ -380,7 +381,7 @@ class RadialTable {
     }
   }
 
-#if defined(HAIRDYN_BLEND_AVX2)
+#if defined(HAIRDYN_COLLISION_AVX2)
   /* Stage 2 eight points at a time with 256-bit vectors, two points per vector, the same
    * products and sums in the same order as blend's: the same bits. Returns the points done
    * (the batch's size rounded down to a multiple of 8); blend does the rest. */
