@@ -377,7 +377,7 @@ template<class L> [[gnu::always_inline]] inline size_t sweep_entry_lanes(
 
 /* The baseline code's four lanes and the AVX2 code's eight, compiled each for its own. */
 inline int cannot_touch4(const SegmentGridScratch::Segment &a,
-                         const SegmentGridScratch::Segment *const b[4], const float sin_parallel2,
+                         const SegmentGridScratch::Segment *const b[], const float sin_parallel2,
                          const bool sweeps)
 {
   return cannot_touch_lanes<Lanes4>(a, b, sin_parallel2, sweeps);
@@ -1323,42 +1323,35 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
                * test for the few kept. */
               for (size_t i = 0; i < hits_num; i += block_lanes) {
                 const int n = int(std::min<size_t>(hits_num - i, block_lanes));
-                const uint32_t *const four = hits.data() + i;
-                int rejected = 0;
-#if defined(HAIRDYN_COLLISION_AVX2)
-                if (n == 8) {
-                  const SegmentGridScratch::Segment *const b[8] = {
-                    &segments[four[0]], &segments[four[1]], &segments[four[2]], &segments[four[3]],
-                    &segments[four[4]], &segments[four[5]], &segments[four[6]], &segments[four[7]]
-                  };
-                  rejected = cannot_touch8(segments[e], b, sin_parallel2, sweeps);
+                const uint32_t *const group = hits.data() + i;
+                const SegmentGridScratch::Segment *b[8];
+                for (int m = 0; m < n; m++) {
+                  b[m] = &segments[group[m]];
                 }
-                else
-#endif
-                    if (n == 4)
-                {
-                  const SegmentGridScratch::Segment *const b[4] = {
-                      &segments[four[0]], &segments[four[1]], &segments[four[2]],
-                      &segments[four[3]]};
+                int rejected = 0;
+                if (n == 4) {
                   rejected = cannot_touch4(segments[e], b, sin_parallel2, sweeps);
                 }
+#if defined(HAIRDYN_COLLISION_AVX2)
+                else if (n == 8) {
+                  rejected = cannot_touch8(segments[e], b, sin_parallel2, sweeps);
+                }
+#endif
                 else {
                   for (int m = 0; m < n; m++) {
-                    rejected |= cannot_touch(segments[e], segments[four[m]], sin_parallel2,
-                                             sweeps) ?
-                                    1 << m :
-                                    0;
+                    rejected |=
+                        cannot_touch(segments[e], *b[m], sin_parallel2, sweeps) ? 1 << m : 0;
                   }
                 }
                 for (int m = 0; m < n; m++) {
-                  tested += is_candidate(e, four[m]);
+                  tested += is_candidate(e, group[m]);
                   /* cannot_touch knows line swept spheres only: strips go to test_pair. */
-                  if (entry_strip != nullptr && (entry_strip[e] | entry_strip[four[m]])) {
+                  if (entry_strip != nullptr && (entry_strip[e] | entry_strip[group[m]])) {
                     rejected &= ~(1 << m);
                   }
                 }
                 for (int kept = ~rejected & ((1 << n) - 1); kept != 0; kept &= kept - 1) {
-                  const uint32_t f = four[__builtin_ctz(unsigned(kept))];
+                  const uint32_t f = group[__builtin_ctz(unsigned(kept))];
                   test(entry_point[e], entry_curve[e], entry_sweep[e], entry_point[f],
                        entry_curve[f], entry_sweep[f], out, &segments[e], &segments[f]);
                 }
