@@ -447,7 +447,8 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
    * world (both shift by the same τ d), so a pair that meets during the substep has boxes that
    * meet there too, and each segment's move there, its `sweep`, bounds how far it moved
    * against any other. Hair that moves together (a swing, a turn) then sweeps smaller boxes:
-   * fewer candidate pairs, the same contacts. */
+   * fewer candidate pairs, the same contacts between line swept spheres (a strip's crossing is
+   * sampled in steps of that move, so it takes fewer samples). */
   vec3 common_move(0.0f);
   if (start.sweeps()) {
     const glm::dvec3 sum = parallel_reduce(
