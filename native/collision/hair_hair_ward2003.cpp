@@ -390,7 +390,7 @@ inline size_t sweep_entry4(const ColumnArrays &a, const float lo, const int32_t 
 }
 #if defined(HAIRDYN_COLLISION_AVX2)
 __attribute__((target("avx2"), flatten)) int cannot_touch8(
-    const SegmentGridScratch::Segment &a, const SegmentGridScratch::Segment *const b[8],
+    const SegmentGridScratch::Segment &a, const SegmentGridScratch::Segment *const b[],
     const float sin_parallel2, const bool sweeps)
 {
   return cannot_touch_lanes<Lanes8>(a, b, sin_parallel2, sweeps);
