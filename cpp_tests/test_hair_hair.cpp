@@ -360,6 +360,40 @@ TEST(HairHair, SegmentsThatCrossedDuringTheSubstepGoBackToTheirSides)
   EXPECT_NEAR(after.distance, 2.0f * r, 1e-6f);
 }
 
+/* The same crossing between two groups' volumes (level of detail: GroupVolumes). Apart at rest,
+ * b goes back above a, as two strands do. Overlapping at rest (their strands interleave, the
+ * cores 1.2 mm apart within the radii's 2 mm), b stays below, where its core went, and the pair
+ * is kept as far apart as at rest: interleaved wisps may pass each other. */
+TEST(HairHair, GroupsThatInterleaveAtRestMayPassEachOther)
+{
+  const float r = 0.001f, h = 0.01f;
+  for (const float rest_gap : { 0.005f, 0.0012f }) {
+    SCOPED_TRACE("b " + std::to_string(rest_gap) + " m above a at rest");
+    Strands strands;
+    strands.add({ vec3(-0.02f, 0, 0), vec3(-0.005f, 0, 0), vec3(0.005f, 0, 0) });
+    strands.add(
+        { vec3(0, -0.02f, -0.0004f), vec3(0, -0.005f, -0.0004f), vec3(0, 0.005f, -0.0004f) },
+        vec3(0, 0, -0.24f));
+    std::vector<vec3> rest = strands.positions;
+    for (size_t p = 3; p < rest.size(); p++) {
+      rest[p].z = rest_gap;
+    }
+    SweptSphereParams params;
+    params.thickness = r;
+    SubstepState state = strands.state(h);
+    state.rest_positions_hs = rest;
+    SegmentGridScratch scratch;
+    std::vector<SegmentContact> contacts;
+    const HairHairStats stats = resolve_hair_hair(params, state, scratch, contacts);
+    const std::vector<vec3> &x = strands.positions;
+    const CoreDistance after = segment_segment_distance(x[1], x[2], x[4], x[5]);
+    const bool apart_at_rest = rest_gap >= 2.0f * r;
+    EXPECT_EQ(stats.crossed_num, apart_at_rest ? 1 : 0);
+    EXPECT_EQ(after.point_b.z > after.point_a.z, apart_at_rest) << "b above a";
+    EXPECT_NEAR(after.distance, apart_at_rest ? 2.0f * r : rest_gap, 1e-6f);
+  }
+}
+
 /* Three passes over 400 random strands (the seed's), each swept from x − h v; the last
  * pass's statistics in r_stats. */
 Strands three_passes(const uint32_t seed, const float h, HairHairStats *r_stats = nullptr)

@@ -862,7 +862,8 @@ bool test_strip_pair(const PairContext &ctx, const int32_t pi, const int32_t pj,
   bool crossed = false;
   vec3 n(0.0f);
   float depth = kept - core.distance;
-  if (ctx.start.sweeps() && sweeps > 0.0f && kept > 0.0f) {
+  /* Only groups apart at rest: see test_pair. */
+  if (ctx.start.sweeps() && sweeps > 0.0f && kept > 0.0f && kept >= radii_sum) {
     const vec3 A0 = ctx.start[pi], A1 = ctx.start[pi + 1];
     const vec3 B0 = ctx.start[pj], B1 = ctx.start[pj + 1];
     const int samples = int(std::min(64.0f, std::ceil(sweeps / kept)));
@@ -960,8 +961,12 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
     const vec3 B0 = copy_j ? vec3(copy_j->start_origin) : ctx.start[pj];
     const vec3 B1 = copy_j ? vec3(copy_j->start_tip) : ctx.start[pj + 1];
     side0 = side_volume(A0, A1, B0, B1);
+    /* Groups whose volumes overlap at rest (kept below the radii: their strands interleave)
+     * are not two bodies: their cores may pass each other, and the overlap test below keeps
+     * them as far apart as at rest. */
     if (side0 != 0.0f && (side0 > 0.0f) != (f1 > 0.0f) &&
-        !apart_throughout({A0, A1, B0, B1}, {a0, a1, b0, b1}, n1, 1.001f * radii_sum))
+        !apart_throughout({ A0, A1, B0, B1 }, { a0, a1, b0, b1 }, n1, 1.001f * radii_sum) &&
+        kept() >= radii_sum)
     {
       /* The root of the (cubic) side volume along the linear sweep: bisection, then a
        * secant step. */
@@ -989,7 +994,7 @@ bool test_pair(const PairContext &ctx, const int32_t pi, const int32_t pj, const
       const float tau = lo + (hi - lo) * (f_lo / (f_lo - f_hi));
       at(tau, p0, p1, q0, q1);
       const float touching = segment_segment_distance(p0, p1, q0, q1).distance;
-      crossed = touching < radii_sum && touching < kept();
+      crossed = touching < radii_sum;
     }
   }
   if (!crossed) {
