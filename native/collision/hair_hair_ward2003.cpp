@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #if defined(__SSE2__)
 #  include <emmintrin.h>
@@ -418,6 +419,15 @@ ivec3 cell_of(const vec3 &p, const vec3 &lo, const glm::dvec3 &inv_cell, const i
   return c;
 }
 
+/* Whether a box whose upper end along grid axis `axis` (1 or 2) is `hi` reaches the column
+ * after `column` along it: cell_of's cell of `hi` beyond `column`, without its floor. */
+inline bool reaches_next(const float hi, const int axis, const int32_t column,
+                         const SegmentGridScratch &g)
+{
+  return column + 1 < g.dims[axis] &&
+         (double(hi) - double(g.grid_lo[axis])) * g.inv_cell[axis] >= double(column + 1);
+}
+
 /* Segments, their swept boxes, and the grid (§5.3: "insert each SSV of the hair into the
  * grids"). Here the cells are columns along the axis of the thinnest boxes (on average), each
  * segment inserted once, in the column of its box's lower corner, and sorted along it. Across
@@ -623,15 +633,24 @@ bool build_grid(const Span<int32_t> curve_offsets, const Span<vec3> positions,
       g.entry_segment[g.fill[c]++] = int32_t(k);
     }
   }
-  /* Within a column, by the lower end along the sweep axis (ties by segment). */
+  /* Within a column, by the lower end along the sweep axis (ties by segment): sorted as keys
+   * of the end's bits in an order that is the floats' (−0 taken as 0) and then the segment. */
+  g.column_keys.resize(entries_num);
   parallel_for(cells_num, 64, [&](const IndexRange range) {
     for (int64_t c = range.start; c < range.one_after_last(); c++) {
       const uint32_t begin = g.cell_offsets[size_t(c)], end = g.cell_offsets[size_t(c) + 1];
-      std::sort(g.entry_segment.begin() + begin, g.entry_segment.begin() + end,
-                [&](const int32_t a, const int32_t b) {
-                  const float la = g.box_min[size_t(a)].x, lb = g.box_min[size_t(b)].x;
-                  return la < lb || (la == lb && a < b);
-                });
+      for (uint32_t e = begin; e < end; e++) {
+        const int32_t k = g.entry_segment[e];
+        uint32_t bits;
+        const float lo = g.box_min[size_t(k)].x + 0.0f;
+        std::memcpy(&bits, &lo, sizeof(bits));
+        bits = (bits & 0x80000000u) ? ~bits : bits | 0x80000000u;
+        g.column_keys[e] = uint64_t(bits) << 32 | uint32_t(k);
+      }
+      std::sort(g.column_keys.begin() + begin, g.column_keys.begin() + end);
+      for (uint32_t e = begin; e < end; e++) {
+        g.entry_segment[e] = int32_t(uint32_t(g.column_keys[e]));
+      }
     }
   });
   g.hi_x.resize(entries_num);
@@ -1285,9 +1304,8 @@ void find_segment_contacts(const Span<int32_t> curve_offsets, const Span<vec3> p
               const float lo = lo_x[e], hi = hi_x[e];
               const int32_t point = entry_point[e];
               const vec4 cross = cross_of(g, e); /* (hi y, hi z, −lo y, −lo z) */
-              const ivec3 reach = cell_of(vec3(hi, cross.x, cross.y), g.grid_lo, g.inv_cell,
-                                          dims);
-              const int n_y = reach.y > y ? 3 : 2, n_z = reach.z > z ? 3 : 2;
+              const int n_y = reaches_next(cross.x, 1, y, g) ? 3 : 2;
+              const int n_z = reaches_next(cross.y, 2, z, g) ? 3 : 2;
 #if defined(__SSE2__)
               const float box[5] = { hi, cross.x, cross.y, cross.z, cross.w };
 #if defined(HAIRDYN_COLLISION_AVX2)

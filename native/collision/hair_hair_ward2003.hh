@@ -85,6 +85,7 @@ struct SegmentGridScratch {
   std::vector<uint32_t> fill;          /* counting sort: per column, the next entry */
   std::vector<int32_t> big_segments;   /* segments whose box is wider than a column */
   std::vector<float> sort_scratch;
+  std::vector<uint64_t> column_keys; /* build_grid's sort of each column */
   std::vector<std::vector<SegmentContact>> chunk_contacts;
   /* Sorting the contacts: per bucket of first points and chunk, the first contact; per contact
    * its pair (first << 32 | second) and where it is. */
