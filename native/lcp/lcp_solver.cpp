@@ -522,18 +522,22 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
     }
   });
   if (params_.implicit_springs) {
-    /* The solve stops when what it leaves would move no particle by h₂/10,000 over the step. */
-    implicit_springs_.velocity_tolerance = 1e-4f * params_.h2 / dt;
-    /* The pressure's stiffness (eq. 16) couples the particles across the whole volume, which
-     * block-Jacobi resolves slowly (95 iterations a frame at 20,000 particles): a coarse
-     * correction over groups of about 4 h₂ (41). The springs alone couple only neighbours;
-     * there it costs more than it saves. Rebuilt on the first substep of every
+    /* The solve stops when what it leaves would move no particle by solver_tolerance h₂
+     * over the step. That test reads each particle's block-Jacobi correction, which stays
+     * small for an error the particles share (the whole volume lagging a turning head as
+     * one); the coarse correction over groups of about 4 h₂ resolves those smooth modes, so
+     * the test bounds the real error (stop 48, a cap of hair under a 1 rad head turn, explicit
+     * pressure, at 5·10⁻⁴ h₂: the mid-turn lag 26% short and the hair ending 0.002 rad ahead of
+     * the head without it, 1% short with it). The pressure's stiffness (eq. 16) couples the
+     * particles across the whole volume, which block-Jacobi resolves slowly too (95 iterations
+     * a frame at 20,000 particles against 41 with it). Rebuilt on the first substep of every
      * coarse_factor_frames-th frame: any symmetric positive definite coarse matrix gives a
      * valid preconditioner, and one a few frames old takes about as many iterations (20,000
      * particles, 48 frames: 40.0 a frame either way with the benchmark's sway, 73.5 against
      * 76.2 with a head swinging 1 rad, 192.9 against 193.3 swinging 1.5 rad fast) for less
      * work (61 against 56 ms a frame; 2,000 particles 4.2 against 3.4 ms). */
-    implicit_springs_.group_cell = implicit_pressure(params_) ? 4.0f * params_.h2 : 0.0f;
+    implicit_springs_.velocity_tolerance = params_.solver_tolerance * params_.h2 / dt;
+    implicit_springs_.group_cell = 4.0f * params_.h2;
     implicit_springs_.refactor_coarse =
         substeps_used_ == 0 && frames_since_coarse_factor_ >= coarse_factor_frames;
     if (implicit_springs_.refactor_coarse) {
