@@ -218,30 +218,39 @@ void ImplicitSprings::factor_coarse()
   if (cholesky.info() != Eigen::Success) {
     groups_num_ = 0; /* not positive definite in double: block-Jacobi alone */
   }
+  /* The factor in single precision for the solve of every iteration: half the bytes to read
+   * (Sintel's groom at 2,000 particles: 102 groups, 22 → 16 µs a solve). */
+  coarse_factor_.assign(coarse_.begin(), coarse_.end());
   coarse_rhs_.resize(size_t(size));
+  coarse_solution_.resize(size_t(size));
   coarse_correction_.resize(size_t(groups_num_));
 }
 
-void ImplicitSprings::solve_coarse(const Span<vec3> residual)
+double ImplicitSprings::solve_coarse(const Span<vec3> residual)
 {
-  std::fill(coarse_rhs_.begin(), coarse_rhs_.end(), 0.0);
+  std::fill(coarse_rhs_.begin(), coarse_rhs_.end(), 0.0f);
   for (int64_t i = 0; i < residual.size(); i++) {
     const int32_t a = group_[size_t(i)];
     if (a >= 0) {
       for (int c = 0; c < 3; c++) {
-        coarse_rhs_[size_t(3 * a + c)] += double(residual[i][c]);
+        coarse_rhs_[size_t(3 * a + c)] += residual[i][c];
       }
     }
   }
   const int64_t size = 3 * groups_num_;
-  const Eigen::Map<const Eigen::MatrixXd> factor(coarse_.data(), size, size);
-  Eigen::Map<Eigen::VectorXd> x(coarse_rhs_.data(), size);
+  const Eigen::Map<const Eigen::MatrixXf> factor(coarse_factor_.data(), size, size);
+  const Eigen::Map<const Eigen::VectorXf> rhs(coarse_rhs_.data(), size);
+  Eigen::Map<Eigen::VectorXf> x(coarse_solution_.data(), size);
+  x = rhs;
   factor.triangularView<Eigen::Lower>().solveInPlace(x);
   factor.triangularView<Eigen::Lower>().adjoint().solveInPlace(x);
+  double energy = 0.0;
   for (int64_t a = 0; a < groups_num_; a++) {
-    coarse_correction_[size_t(a)] =
-        vec3(float(x[3 * a]), float(x[3 * a + 1]), float(x[3 * a + 2]));
+    coarse_correction_[size_t(a)] = vec3(x[3 * a], x[3 * a + 1], x[3 * a + 2]);
+    energy += double(
+        glm::dot(vec3(rhs[3 * a], rhs[3 * a + 1], rhs[3 * a + 2]), coarse_correction_[size_t(a)]));
   }
+  return energy;
 }
 
 int ImplicitSprings::first_guess()
@@ -402,31 +411,22 @@ ImplicitSprings::Result ImplicitSprings::step(
 
   /* Preconditioned conjugate gradients, starting from the projection of the last steps' Δv
    * (from one substep to the next the springs' impulse changes little), until no particle's
-   * preconditioned residual, a velocity correction, exceeds the tolerance. */
-  struct Residual {
-    double rz = 0.0;          /* rᵀ P⁻¹ r */
-    float max_correction = 0; /* max_i ‖D_i⁻¹ r_i‖, the block-Jacobi part */
-  };
-  const auto combine = [](const Residual &a, const Residual &b) {
-    return Residual{ a.rz + b.rz, std::max(a.max_correction, b.max_correction) };
-  };
-  /* r_i −= alpha q_i, z_i = D_i⁻¹ r_i, and the sums (rᵀ z only without the coarse
-   * correction: with it, add_coarse sums rᵀ z once z is whole). */
+   * preconditioned residual z = P⁻¹ r, a velocity correction, exceeds the tolerance. */
+  /* r_i −= alpha q_i, z_i = D_i⁻¹ r_i (the block-Jacobi part of P⁻¹ r); returns its part of
+   * rᵀ z. */
   const auto update_residual = [&](const IndexRange range, const float alpha) {
-    Residual sums;
-    const bool jacobi_only = groups_num_ == 0;
+    double rz = 0.0;
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       residual_[size_t(i)] -= alpha * product_[size_t(i)];
       preconditioned_[size_t(i)] = inverse_diagonal_[size_t(i)] * residual_[size_t(i)];
-      if (jacobi_only) {
-        sums.rz += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
-      }
-      sums.max_correction = std::max(sums.max_correction, glm::length(preconditioned_[size_t(i)]));
+      rz += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
     }
-    return sums;
+    return rz;
   };
   /* The groups (kept for regroup_steps steps) and the coarse factor (as refactor_coarse
-   * asks); then in each iteration the coarse correction added to z = D⁻¹ r, and rᵀ z again. */
+   * asks); then in each iteration the coarse correction Q A_c⁻¹ Qᵀ r, added to z as the
+   * direction is updated, and its part of rᵀ z: rᵀ Q A_c⁻¹ Qᵀ r = b_cᵀ A_c⁻¹ b_c over the
+   * groups alone (no pass over the particles for it). */
   bool refactor = refactor_coarse || coarse_.empty();
   bool regroup = int64_t(group_.size()) != n || steps_since_groups_ >= regroup_steps;
   for (int64_t i = 0; i < (groups_num_ > 0 && !regroup ? n : 0); i++) {
@@ -441,61 +441,59 @@ ImplicitSprings::Result ImplicitSprings::step(
   if (refactor) {
     factor_coarse();
   }
-  const auto add_coarse = [&](Residual &sums) {
-    if (groups_num_ == 0) {
-      return;
-    }
-    solve_coarse(residual_);
-    sums.rz = parallel_sum(n, grain, [&](const IndexRange range) {
-      double rz = 0.0;
-      for (int64_t i = range.start; i < range.one_after_last(); i++) {
-        const int32_t a = group_[size_t(i)];
-        if (a >= 0) {
-          preconditioned_[size_t(i)] += coarse_correction_[size_t(a)];
-        }
-        rz += double(glm::dot(residual_[size_t(i)], preconditioned_[size_t(i)]));
-      }
-      return rz;
-    });
+  const auto coarse_part = [&]() {
+    return groups_num_ > 0 ? solve_coarse(residual_) : 0.0;
+  };
+  /* p = z + β p (p = z when β is 0: the first direction reads nothing of the last solve's),
+   * z = D⁻¹ r plus the coarse correction of the particle's group; returns max_i ‖z_i‖. The
+   * stop test reads the whole z: block-Jacobi's part alone stays small for an error that
+   * many particles share, which the coarse part shows. */
+  const auto update_direction = [&](const float beta) {
+    return parallel_reduce(
+        n, grain, 0.0f,
+        [&](const IndexRange range) {
+          float largest = 0.0f;
+          for (int64_t i = range.start; i < range.one_after_last(); i++) {
+            const int32_t a = groups_num_ > 0 ? group_[size_t(i)] : -1;
+            const vec3 z = a >= 0 ? preconditioned_[size_t(i)] + coarse_correction_[size_t(a)]
+                                  : preconditioned_[size_t(i)];
+            direction_[size_t(i)] = beta == 0.0f ? z : z + beta * direction_[size_t(i)];
+            largest = std::max(largest, glm::length(z));
+          }
+          return largest;
+        },
+        [](const float a, const float b) {
+          return std::max(a, b);
+        });
   };
   Result result;
   result.products = first_guess(); /* r = b − A Δv₀ */
   residual_ = rhs_;
-  Residual residual = parallel_reduce(
-      n, grain, Residual{},
-      [&](const IndexRange range) {
-        return update_residual(range, 1.0f);
-      },
-      combine);
-  add_coarse(residual);
-  direction_ = preconditioned_;
-  while (residual.max_correction > velocity_tolerance && result.iterations < max_iterations) {
+  double rz = parallel_sum(n, grain, [&](const IndexRange range) {
+    return update_residual(range, 1.0f);
+  });
+  rz += coarse_part();
+  float max_correction = update_direction(0.0f);
+  while (max_correction > velocity_tolerance && result.iterations < max_iterations) {
     const double pq = multiply_dot(direction_, product_);
     if (!(pq > 0.0)) {
       break;
     }
-    const float alpha = float(residual.rz / pq);
-    Residual next = parallel_reduce(
-        n, grain, Residual{},
-        [&](const IndexRange range) {
-          for (int64_t i = range.start; i < range.one_after_last(); i++) {
-            dv_[size_t(i)] += alpha * direction_[size_t(i)];
-          }
-          return update_residual(range, alpha);
-        },
-        combine);
-    add_coarse(next);
-    const float beta = float(next.rz / residual.rz);
-    residual = next;
-    parallel_for(n, grain, [&](const IndexRange range) {
+    const float alpha = float(rz / pq);
+    double next_rz = parallel_sum(n, grain, [&](const IndexRange range) {
       for (int64_t i = range.start; i < range.one_after_last(); i++) {
-        direction_[size_t(i)] = preconditioned_[size_t(i)] + beta * direction_[size_t(i)];
+        dv_[size_t(i)] += alpha * direction_[size_t(i)];
       }
+      return update_residual(range, alpha);
     });
+    next_rz += coarse_part();
+    const float beta = float(next_rz / rz);
+    rz = next_rz;
+    max_correction = update_direction(beta);
     result.iterations++;
     result.products++;
   }
-  result.max_correction = residual.max_correction;
+  result.max_correction = max_correction;
 
   parallel_for(n, grain, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {

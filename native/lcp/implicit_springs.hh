@@ -95,8 +95,9 @@ class ImplicitSprings {
    * asks, over the groups of build_groups() (kept for regroup_steps steps). */
   void build_groups(Span<vec3> positions);
   void factor_coarse();
-  /* coarse_correction_ = A_c⁻¹ Qᵀ r, per group. */
-  void solve_coarse(Span<vec3> residual);
+  /* coarse_correction_ = A_c⁻¹ Qᵀ r, per group; returns rᵀ Q A_c⁻¹ Qᵀ r, the coarse part of
+   * rᵀ P⁻¹ r. */
+  double solve_coarse(Span<vec3> residual);
   /* dv_ = the first guess and product_ = A dv_ (see history_); returns the products it took. */
   int first_guess();
 
@@ -137,10 +138,12 @@ class ImplicitSprings {
    * (coefficients from them took more iterations than the last Δv alone). */
   std::vector<std::vector<vec3>> history_, basis_, basis_products_;
   /* Per particle its group (−1: fixed); the coarse matrix, then its Cholesky factor (3g × 3g,
-   * column-major, double); the coarse right-hand side and, per group, its correction. */
+   * column-major, double), the factor again in single precision for the solves; the coarse
+   * right-hand side Qᵀ r, A_c⁻¹ Qᵀ r and, per group, that correction. */
   std::vector<int32_t> group_;
   int64_t groups_num_ = 0;
-  std::vector<double> coarse_, coarse_rhs_;
+  std::vector<double> coarse_;
+  std::vector<float> coarse_factor_, coarse_rhs_, coarse_solution_;
   std::vector<vec3> coarse_correction_;
   std::vector<uint64_t> group_keys_;
   /* The groups are kept for regroup_steps steps: the particles drift little meanwhile, and

@@ -523,12 +523,12 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   });
   if (params_.implicit_springs) {
     /* The solve stops when what it leaves would move no particle by solver_tolerance h₂
-     * over the step. That test reads each particle's block-Jacobi correction, which stays
-     * small for an error the particles share (the whole volume lagging a turning head as
-     * one); the coarse correction over groups of about 4 h₂ resolves those smooth modes, so
-     * the test bounds the real error (stop 48, a cap of hair under a 1 rad head turn, explicit
-     * pressure, at 5·10⁻⁴ h₂: the mid-turn lag 26% short and the hair ending 0.002 rad ahead of
-     * the head without it, 1% short with it). The pressure's stiffness (eq. 16) couples the
+     * over the step. A particle's block-Jacobi correction alone stays small for an error the
+     * particles share (the whole volume lagging a turning head as one); the coarse correction
+     * over groups of about 4 h₂ resolves those smooth modes and is part of what the test reads
+     * (stop 48, a cap of hair under a 1 rad head turn, explicit pressure, at 5·10⁻⁴ h₂: the
+     * mid-turn lag 26% short and the hair ending 0.002 rad ahead of the head with block-Jacobi
+     * alone; with the coarse correction within 0.3%). The pressure's stiffness (eq. 16) couples the
      * particles across the whole volume, which block-Jacobi resolves slowly too (95 iterations
      * a frame at 20,000 particles against 41 with it). Rebuilt on the first substep of every
      * coarse_factor_frames-th frame: any symmetric positive definite coarse matrix gives a
