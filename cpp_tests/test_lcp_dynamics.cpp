@@ -364,8 +364,8 @@ TEST(LcpDynamics, HeadShakeHairLagsAndFollowsAndStaysOutOfTheHead)
 /* The solve's stopping test reads each particle's own correction; an error all particles
  * share (the volume lagging as one) must not hide under it: at the default solver_tolerance
  * the lag behind the turning head stays within 5% of a solve to 10⁻⁶ h₂, and the hair ends
- * where the head does. (Without the coarse correction in the explicit pressure's solve, the
- * lag came out 26% short and the hair ended 0.002 rad ahead of the head.) */
+ * where the head does. (With block-Jacobi's test alone the explicit pressure's lag came out
+ * 26% short and the hair ended 0.002 rad ahead of the head.) */
 TEST(LcpDynamics, DefaultSolverToleranceKeepsTheLagBehindATurningHead)
 {
   for (const bool implicit_pressure : { false, true }) {

@@ -69,6 +69,13 @@ class ImplicitSprings {
    * max_groups cells hold particles. */
   float group_cell = 0.0f;
   int max_groups = 160;
+  /* Whether the coarse correction joins every iteration's preconditioner (two-level
+   * additive: where block-Jacobi converges slowly, as with the pressure's stiffness); else
+   * the iterations are block-Jacobi's alone, and once they pass the tolerance the error the
+   * particles share is checked with one coarse solve and, past it, corrected (at most
+   * max_coarse_checks times a step). Either way the stop sees that shared error, which a
+   * particle's block-Jacobi correction alone hides. */
+  bool coarse_in_preconditioner = true;
   /* Whether this step rebuilds the coarse matrix; otherwise the last one's serves (any
    * symmetric positive definite A_c gives a valid preconditioner, and within a frame the
    * blocks change little). */
@@ -149,6 +156,7 @@ class ImplicitSprings {
   /* The groups are kept for regroup_steps steps: the particles drift little meanwhile, and
    * any grouping gives a valid preconditioner. */
   static constexpr int regroup_steps = 24;
+  static constexpr int max_coarse_checks = 4;
   int steps_since_groups_ = 0;
 };
 

@@ -524,20 +524,24 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
   if (params_.implicit_springs) {
     /* The solve stops when what it leaves would move no particle by solver_tolerance h₂
      * over the step. A particle's block-Jacobi correction alone stays small for an error the
-     * particles share (the whole volume lagging a turning head as one); the coarse correction
-     * over groups of about 4 h₂ resolves those smooth modes and is part of what the test reads
-     * (stop 48, a cap of hair under a 1 rad head turn, explicit pressure, at 5·10⁻⁴ h₂: the
-     * mid-turn lag 26% short and the hair ending 0.002 rad ahead of the head with block-Jacobi
-     * alone; with the coarse correction within 0.3%). The pressure's stiffness (eq. 16) couples the
-     * particles across the whole volume, which block-Jacobi resolves slowly too (95 iterations
-     * a frame at 20,000 particles against 41 with it). Rebuilt on the first substep of every
-     * coarse_factor_frames-th frame: any symmetric positive definite coarse matrix gives a
+     * particles share (the whole volume lagging a turning head as one), which the coarse
+     * correction over groups of about 4 h₂ shows (stop 48, a cap of hair under a 1 rad head
+     * turn, explicit pressure, at 5·10⁻⁴ h₂: the mid-turn lag 26% short and the hair ending
+     * 0.002 rad ahead of the head with block-Jacobi alone; 0.6% short with the coarse check).
+     * The springs alone couple only neighbours: their iterations stay block-Jacobi's and the
+     * shared error is checked at the end (at 2,000 particles a coarse solve in every
+     * iteration cost about as much as a matrix product, and the frame 18% more). The
+     * pressure's stiffness (eq. 16) couples the particles across the whole volume, which
+     * block-Jacobi resolves slowly: there the coarse correction joins every iteration's
+     * preconditioner (95 iterations a frame at 20,000 particles against 41). The coarse
+     * factor is rebuilt on the first substep of every coarse_factor_frames-th frame: any symmetric positive definite coarse matrix gives a
      * valid preconditioner, and one a few frames old takes about as many iterations (20,000
      * particles, 48 frames: 40.0 a frame either way with the benchmark's sway, 73.5 against
      * 76.2 with a head swinging 1 rad, 192.9 against 193.3 swinging 1.5 rad fast) for less
      * work (61 against 56 ms a frame; 2,000 particles 4.2 against 3.4 ms). */
     implicit_springs_.velocity_tolerance = params_.solver_tolerance * params_.h2 / dt;
     implicit_springs_.group_cell = 4.0f * params_.h2;
+    implicit_springs_.coarse_in_preconditioner = implicit_pressure(params_);
     implicit_springs_.refactor_coarse =
         substeps_used_ == 0 && frames_since_coarse_factor_ >= coarse_factor_frames;
     if (implicit_springs_.refactor_coarse) {
