@@ -71,10 +71,10 @@ struct LcpParams {
    * springs) ask for more is refused with the reason, rather than running for minutes. */
   int32_t max_substeps = 200;
   /* Share of h₂: the implicit step's conjugate gradients stop when what they leave would move
-   * no particle by more than solver_tolerance h₂ over the step. 5·10⁻⁴ leaves about 1% of the
+   * no particle by more than solver_tolerance h₂ over the step. 5·10⁻⁴ leaves 1-3% of the
    * time step's own error (what twice the substeps change) in swaying back hair, and the
    * lag behind a turning head within 1% (tests DefaultSolverTolerance*); 10⁻⁴ until stop 47,
-   * for 40-60% more matrix products. */
+   * for 40-70% more matrix products. */
   float solver_tolerance = 5e-4f;
 
   template<typename Fn> static void for_each_field(Fn &&fn)
