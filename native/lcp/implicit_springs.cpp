@@ -424,9 +424,10 @@ ImplicitSprings::Result ImplicitSprings::step(
     return rz;
   };
   /* The groups (kept for regroup_steps steps) and the coarse factor (as refactor_coarse
-   * asks); then in each iteration the coarse correction Q A_c⁻¹ Qᵀ r, added to z as the
-   * direction is updated, and its part of rᵀ z: rᵀ Q A_c⁻¹ Qᵀ r = b_cᵀ A_c⁻¹ b_c over the
-   * groups alone (no pass over the particles for it). */
+   * asks). With coarse_in_preconditioner, in each iteration the coarse correction
+   * Q A_c⁻¹ Qᵀ r, added to z as the direction is updated, and its part of rᵀ z:
+   * rᵀ Q A_c⁻¹ Qᵀ r = b_cᵀ A_c⁻¹ b_c over the groups alone (no pass over the particles for
+   * it); without, the check after the iterations below. */
   bool refactor = refactor_coarse || coarse_.empty();
   bool regroup = int64_t(group_.size()) != n || steps_since_groups_ >= regroup_steps;
   for (int64_t i = 0; i < (groups_num_ > 0 && !regroup ? n : 0); i++) {
@@ -446,9 +447,8 @@ ImplicitSprings::Result ImplicitSprings::step(
     return additive ? solve_coarse(residual_) : 0.0;
   };
   /* p = z + β p (p = z when β is 0: the first direction reads nothing of the last solve's),
-   * z = D⁻¹ r plus the coarse correction of the particle's group; returns max_i ‖z_i‖. The
-   * stop test reads the whole z: block-Jacobi's part alone stays small for an error that
-   * many particles share, which the coarse part shows. */
+   * z = D⁻¹ r plus, in the additive preconditioner, the coarse correction of the particle's
+   * group; returns max_i ‖z_i‖, what the stop test reads. */
   const auto update_direction = [&](const float beta) {
     return parallel_reduce(
         n, grain, 0.0f,

@@ -12,9 +12,11 @@
  *
  * K keeping only its positive semi-definite part (a compressed spring's lateral term is
  * dropped). The matrix is then symmetric positive definite and is solved by conjugate
- * gradients with a block-Jacobi (3 × 3) preconditioner, plus optionally a coarse correction
- * over groups of particles (two-level, group_cell), warm-started from the previous steps'
- * solutions (their Galerkin projection, guess_history). The step is stable for any Δt: the
+ * gradients with a block-Jacobi (3 × 3) preconditioner, plus a coarse correction over groups
+ * of particles (group_cell), either in every iteration (two-level additive) or as a check of
+ * the error the particles share once the iterations pass the tolerance
+ * (coarse_in_preconditioner), warm-started from the previous steps' solutions (their
+ * Galerkin projection, guess_history). The step is stable for any Δt: the
  * springs' stiffness no longer sets the number of substeps.
  *
  * The attraction/repulsion of eq. 16 may join the same step: its force is applied
