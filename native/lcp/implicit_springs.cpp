@@ -467,14 +467,23 @@ ImplicitSprings::Result ImplicitSprings::step(
           return std::max(a, b);
         });
   };
+  /* Δv += direction_ (when `add_direction`) and r −= product_, z, rᵀ z, and the first
+   * direction z: the start of the iterations, from the first guess or a coarse correction. */
+  double rz = 0.0;
+  const auto start_from = [&](const bool add_direction) {
+    rz = parallel_sum(n, grain, [&](const IndexRange range) {
+      for (int64_t i = range.start; add_direction && i < range.one_after_last(); i++) {
+        dv_[size_t(i)] += direction_[size_t(i)];
+      }
+      return update_residual(range, 1.0f);
+    });
+    rz += coarse_part();
+    return update_direction(0.0f);
+  };
   Result result;
   result.products = first_guess(); /* r = b − A Δv₀ */
   residual_ = rhs_;
-  double rz = parallel_sum(n, grain, [&](const IndexRange range) {
-    return update_residual(range, 1.0f);
-  });
-  rz += coarse_part();
-  float max_correction = update_direction(0.0f);
+  float max_correction = start_from(false);
   for (int check = 0;; check++) {
     while (max_correction > velocity_tolerance && result.iterations < max_iterations) {
       const double pq = multiply_dot(direction_, product_);
@@ -521,13 +530,7 @@ ImplicitSprings::Result ImplicitSprings::step(
     });
     multiply_dot(direction_, product_);
     result.products++;
-    rz = parallel_sum(n, grain, [&](const IndexRange range) {
-      for (int64_t i = range.start; i < range.one_after_last(); i++) {
-        dv_[size_t(i)] += direction_[size_t(i)];
-      }
-      return update_residual(range, 1.0f);
-    });
-    max_correction = update_direction(0.0f);
+    max_correction = start_from(true);
   }
   result.max_correction = max_correction;
 

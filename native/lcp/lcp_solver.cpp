@@ -534,8 +534,9 @@ void LcpSolver::substep(const float dt, const HeadState &mid, const HeadState &e
      * pressure's stiffness (eq. 16) couples the particles across the whole volume, which
      * block-Jacobi resolves slowly: there the coarse correction joins every iteration's
      * preconditioner (95 iterations a frame at 20,000 particles against 41). The coarse
-     * factor is rebuilt on the first substep of every coarse_factor_frames-th frame: any symmetric positive definite coarse matrix gives a
-     * valid preconditioner, and one a few frames old takes about as many iterations (20,000
+     * factor is rebuilt on the first substep of every coarse_factor_frames-th frame: any
+     * symmetric positive definite coarse matrix gives a valid preconditioner, and one a few
+     * frames old takes about as many iterations (20,000
      * particles, 48 frames: 40.0 a frame either way with the benchmark's sway, 73.5 against
      * 76.2 with a head swinging 1 rad, 192.9 against 193.3 swinging 1.5 rad fast) for less
      * work (61 against 56 ms a frame; 2,000 particles 4.2 against 3.4 ms). */
