@@ -360,6 +360,55 @@ def test_head_without_vertices_is_a_clear_error(empty_scene):
         simulation.Simulation(obj, depsgraph(), empty_scene)
 
 
+@pytest.mark.parametrize("count", [1, 2, 1537])
+def test_set_rows_writes_the_objects_own_array_and_not_a_copys(empty_scene, count):
+    """set_rows puts rows in bit for bit, into the object's own array: a copy that shares it
+    (Blender 4 and later share arrays between copies until one is written) keeps its rows."""
+    rng = np.random.default_rng(count)
+    mesh = bpy.data.meshes.new("Rows")
+    mesh.vertices.add(count)
+    curves = bridge.new_curves_data("Rows", [count])
+    for data in (mesh, curves):
+        data.attributes.new("vector", 'FLOAT_VECTOR', 'POINT')
+        data.attributes.new("scalar", 'FLOAT', 'POINT')
+    collections = [
+        (mesh.attributes["vector"].data, "vector", 3),
+        (mesh.attributes["scalar"].data, "value", 1),
+        (mesh.vertices, "co", 3),
+        (curves.attributes["vector"].data, "vector", 3),
+        (curves.attributes["scalar"].data, "value", 1),
+        (curves.position_data, "vector", 3),
+    ]
+
+    def rows(width):
+        return rng.normal(size=(count, width) if width > 1 else count).astype(np.float32)
+
+    def read(collection, field, width):
+        back = np.empty(count * width, dtype=np.float32)
+        collection.foreach_get(field, back)
+        return back
+
+    before = [rows(width) for _, _, width in collections]
+    for (collection, field, _), values in zip(collections, before):
+        bridge.set_rows(collection, field, values)
+    mesh_copy, curves_copy = mesh.copy(), curves.copy()
+    after = [rows(width) for _, _, width in collections]
+    for (collection, field, _), values in zip(collections, after):
+        bridge.set_rows(collection, field, values)
+    copies = [
+        (mesh_copy.attributes["vector"].data, "vector", 3),
+        (mesh_copy.attributes["scalar"].data, "value", 1),
+        (mesh_copy.vertices, "co", 3),
+        (curves_copy.attributes["vector"].data, "vector", 3),
+        (curves_copy.attributes["scalar"].data, "value", 1),
+        (curves_copy.position_data, "vector", 3),
+    ]
+    for (collection, field, width), values in zip(collections, after):
+        assert read(collection, field, width).tobytes() == values.tobytes(), field
+    for (collection, field, width), values in zip(copies, before):
+        assert read(collection, field, width).tobytes() == values.tobytes(), field
+
+
 @pytest.mark.parametrize("count", [1, 700, 1024, 1537])
 def test_points_output_positions_and_texture_space_are_blenders(empty_scene, count):
     """write_points puts the positions in bit for bit, whichever way the Blender stores them,
