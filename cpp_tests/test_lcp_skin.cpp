@@ -128,6 +128,61 @@ TEST(LcpSkin, RestAndRigidHeadMotionAreExact)
   }
 }
 
+/* Strands that stick out sideways over particles that hang from the same roots (particles
+ * sampled apart from the groom, as over the scalp): carried by displacements they keep sticking
+ * out at rest; with shape_from_particles they hang in the particles' column, each point at its
+ * own arc length below the root, and follow the column when it swings, lengths kept. */
+TEST(LcpSkin, ShapeFromParticlesPutsTheStrandsInTheVolume)
+{
+  const Groom hanging;
+  std::vector<vec3> sideways;
+  for (size_t c = 0; c + 1 < hanging.offsets.size(); c++) {
+    const vec3 root = hanging.points[size_t(hanging.offsets[c])];
+    for (int32_t i = hanging.offsets[c]; i < hanging.offsets[c + 1]; i++) {
+      sideways.push_back(root + vec3(0.01f * float(i - hanging.offsets[c]), 0.0f, 0.0f));
+    }
+  }
+  const LcpParticles &particles = hanging.particles;
+  const auto skin = [&](const bool shape_from_particles) {
+    return ParticleSkin(hanging.offsets, sideways, particles.positions, particles.directions,
+                        particles.u, particles.v, particles.s, mat4(1.0f), 4,
+                        shape_from_particles);
+  };
+  std::vector<vec3> out(sideways.size());
+  ParticleSkin carried = skin(false);
+  carried.apply(particles.positions, mat4(1.0f), nullptr, out);
+  for (size_t i = 0; i < out.size(); i++) {
+    ASSERT_LT(glm::length(out[i] - sideways[i]), 1e-6f) << i;
+  }
+  ParticleSkin volume = skin(true);
+  volume.apply(particles.positions, mat4(1.0f), nullptr, out, particles.directions);
+  /* Within a tenth of the strands' 6 cm spacing: a blend may reach a neighbour column's
+   * particle (one tip, 5 mm); on average within 0.1 mm. */
+  float largest = 0.0f, sum = 0.0f;
+  for (size_t i = 0; i < out.size(); i++) {
+    largest = std::max(largest, glm::length(out[i] - hanging.points[i]));
+    sum += glm::length(out[i] - hanging.points[i]);
+  }
+  EXPECT_LT(largest, 0.006f);
+  EXPECT_LT(sum / float(out.size()), 1e-4f);
+  /* Every particle swings by 0.4 rad about the x axis through its strand's root. */
+  const mat3 swing = glm::mat3_cast(glm::angleAxis(0.4f, vec3(1.0f, 0.0f, 0.0f)));
+  std::vector<vec3> x = particles.positions, t = particles.directions;
+  for (size_t j = 0; j < x.size(); j++) {
+    const vec3 root(x[j].x, x[j].y, 0.0f);
+    x[j] = root + swing * (x[j] - root);
+    t[j] = swing * t[j];
+  }
+  volume.apply(x, mat4(1.0f), nullptr, out, t);
+  for (size_t c = 0; c + 1 < hanging.offsets.size(); c++) {
+    const int32_t tip = hanging.offsets[c + 1] - 1;
+    const vec3 root = hanging.points[size_t(hanging.offsets[c])];
+    const vec3 expected = root + swing * (hanging.points[size_t(tip)] - root);
+    EXPECT_LT(glm::length(out[size_t(tip)] - expected), 0.006f) << c; /* it moves 4.7 cm */
+  }
+  EXPECT_LT(max_length_error(hanging, out), 1e-6f);
+}
+
 /* Strand 5's particles (those on its axis) swing by 0.4 rad about its root: the strand follows
  * them, keeps its segment lengths, and the strands 6 cm away, whose particles did not move,
  * do not move. */

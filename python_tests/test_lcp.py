@@ -51,6 +51,33 @@ def test_lcp_runs_on_the_head_and_carries_the_strands(open_fixture):
     assert report["stretch_max"] < 1e-4  # strands keep their length while the volume deforms
 
 
+def test_lcp_strands_lie_in_the_volume_of_scalp_particles(open_fixture):
+    """Particles sampled over the scalp (the default) hang in the cantilever shape of §3.2,
+    while the fixture's groom sticks out sideways: the output strands take the volume's shape
+    (every point within about a particle spacing of a particle) instead of keeping the
+    groom's shape beside it."""
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    hair.hairdyn.method = 'LCP'
+    simulation.run(bpy.context, hair, 1, 1)
+    out = bridge.read_curves(hair.hairdyn.output_curves, depsgraph())
+    groom = bridge.read_curves(hair, depsgraph())
+    mesh = hair.hairdyn.output_points.data
+    particles = np.empty((len(mesh.vertices), 3), np.float32)
+    mesh.vertices.foreach_get("co", particles.ravel())
+    free = np.ones(len(out.positions_wo), bool)
+    free[out.curve_offsets[:-1]] = False
+
+    def nearest_particle(points):
+        gaps = points[:, None, :] - particles[None, :, :]
+        return np.sqrt(np.min(np.einsum("ijk,ijk->ij", gaps, gaps), axis=1))
+
+    spacing = hair.hairdyn.lcp.particle_spacing
+    assert np.median(nearest_particle(groom.positions_wo[free])) > 5 * spacing  # beside it
+    inside = nearest_particle(out.positions_wo[free])
+    assert np.percentile(inside, 95) < spacing and inside.max() < 2 * spacing
+
+
 def test_lcp_particles_reach_the_point_output(open_fixture):
     hair = lcp_hair(open_fixture, "head_curves.blend")
     report = simulation.run(bpy.context, hair, 1, 3)

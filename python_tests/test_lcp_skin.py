@@ -119,3 +119,25 @@ def test_native_skin_refuses_bad_input_with_a_sentence():
     bad[7, 1] = np.nan
     with pytest.raises(ValueError, match="row 7|point 7|7"):
         skin.apply(bad, np.eye(4))
+
+
+def test_native_skin_from_the_particles_shape_needs_their_directions():
+    """A skin that gives the strands the particles' shape reads their directions; without
+    them, or with the wrong count, a sentence, not a crash."""
+    import pytest
+
+    n = native.load()
+    groom = small_groom()
+    params = n.LcpParams(particle_spacing=0.012, particle_num=0, h1=0.016, h2=0.011)
+    particles = n.lcp_particles_from_groom(params, groom.curve_offsets, groom.positions_wo)
+    solver = SimpleNamespace(
+        **{k: particles[k] for k in ("positions", "directions", "u", "v", "s")}
+    )
+    skin = n.ParticleSkin(groom, solver, np.eye(4), shape_from_particles=True)
+    with pytest.raises(ValueError, match="needs the particles' directions"):
+        skin.apply(particles["positions"], np.eye(4))
+    with pytest.raises(ValueError, match="directions_wo must have one row per particle"):
+        skin.apply(particles["positions"], np.eye(4), directions_wo=particles["directions"][:-1])
+    # Particles along the groom: the groom's own shape, within the particles' spread.
+    strands = skin.apply(particles["positions"], np.eye(4), directions_wo=particles["directions"])
+    assert np.abs(strands - groom.positions_wo).max() < 0.012

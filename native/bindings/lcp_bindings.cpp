@@ -365,7 +365,8 @@ void bind_lcp(py::module_ &m)
       "particles nearest its (u, v, s), strands keep their segment lengths and are swung out "
       "of the body.")
       .def(py::init([](const py::handle groom, const py::handle solver,
-                       const py::handle head_matrix, const int neighbours_num) {
+                       const py::handle head_matrix, const int neighbours_num,
+                       const bool shape_from_particles) {
              /* Duck-typed arguments: a missing array is a TypeError naming it. */
              const auto array = [](const py::handle owner, const char *owner_name,
                                    const char *name) {
@@ -400,21 +401,35 @@ void bind_lcp(py::module_ &m)
              }
              const mat4 head = as_head_matrix(head_matrix, "head_matrix");
              py::gil_scoped_release release;
-             return new ParticleSkin(offsets, points, x, t, u, v, s, head, neighbours_num);
+             return new ParticleSkin(offsets, points, x, t, u, v, s, head, neighbours_num,
+                                     shape_from_particles);
            }),
            py::arg("groom"), py::arg("solver"), py::arg("head_matrix"),
-           py::arg("neighbours_num") = 4,
+           py::arg("neighbours_num") = 4, py::arg("shape_from_particles") = false,
            "groom: any object with curve_offsets (C+1,) int32 and positions_wo (N, 3) float32 "
            "at rest; solver: the LcpSolver at rest (or any object with its positions, "
-           "directions, u, v, s arrays); head_matrix: the head's 4x4 matrix then.")
+           "directions, u, v, s arrays); head_matrix: the head's 4x4 matrix then. "
+           "shape_from_particles: the strands take the particles' shape (with their own "
+           "lengths) instead of the groom's, for particles that do not come from the groom.")
       .def(
           "apply",
           [](ParticleSkin &self, const py::handle particles_wo, const py::handle head_matrix,
-             const ColliderSet *colliders) {
+             const ColliderSet *colliders, const py::handle directions_wo) {
             const Span<vec3> x = as_float3(particles_wo, "particles_wo");
             if (x.size() != self.particles_num()) {
               fail("particles_wo must have one row per particle (" +
                    std::to_string(self.particles_num()) + "), not " + std::to_string(x.size()));
+            }
+            Span<vec3> t;
+            if (self.shape_from_particles()) {
+              if (directions_wo.is_none()) {
+                fail("a skin built with shape_from_particles needs the particles' directions");
+              }
+              t = as_float3(directions_wo, "directions_wo");
+              if (t.size() != x.size()) {
+                fail("directions_wo must have one row per particle (" + std::to_string(x.size()) +
+                     "), not " + std::to_string(t.size()));
+              }
             }
             const mat4 head = as_head_matrix(head_matrix, "head_matrix");
             py::array_t<float> result({self.points_num(), int64_t(3)});
@@ -422,13 +437,17 @@ void bind_lcp(py::module_ &m)
               py::gil_scoped_release release;
               self.apply(x, head, colliders,
                          MutableSpan<vec3>(reinterpret_cast<vec3 *>(result.mutable_data()),
-                                           self.points_num()));
+                                           self.points_num()),
+                         t);
             }
             return result;
           },
           py::arg("particles_wo"), py::arg("head_matrix"), py::arg("colliders") = py::none(),
+          py::arg("directions_wo") = py::none(),
           "Strand positions (N, 3) float32 for the particles' current world positions; "
-          "colliders (a ColliderSet, or None) keeps the points out of the body.")
+          "colliders (a ColliderSet, or None) keeps the points out of the body; "
+          "directions_wo, the particles' current unit directions, for a skin built with "
+          "shape_from_particles (ignored otherwise).")
       .def(
           "set_pinned",
           [](ParticleSkin &self, const py::handle pinned) {

@@ -99,8 +99,10 @@ static glm::dvec3 transform_point(const glm::dmat4 &m, const vec3 &p)
 ParticleSkin::ParticleSkin(const Span<int32_t> curve_offsets, const Span<vec3> points_wo,
                            const Span<vec3> particles_wo, const Span<vec3> directions_wo,
                            const Span<float> u, const Span<float> v, const Span<float> s,
-                           const mat4 &head_to_world, const int neighbours_num)
-    : curve_offsets_(curve_offsets.begin(), curve_offsets.end()), neighbours_num_(neighbours_num)
+                           const mat4 &head_to_world, const int neighbours_num,
+                           const bool shape_from_particles) :
+    curve_offsets_(curve_offsets.begin(), curve_offsets.end()),
+    neighbours_num_(neighbours_num), shape_from_particles_(shape_from_particles)
 {
   const int64_t points_num = points_wo.size(), particles_num = particles_wo.size();
   const int64_t curves_num = curve_offsets.size() - 1;
@@ -169,6 +171,10 @@ ParticleSkin::ParticleSkin(const Span<int32_t> curve_offsets, const Span<vec3> p
   for (int64_t j = 0; j < particles_num; j++) {
     particles_rest_head_[size_t(j)] = transform_point(to_head, particles_wo[j]);
   }
+  if (shape_from_particles) {
+    arc_.assign(arc.begin(), arc.end());
+    particle_s_.assign(s.begin(), s.end());
+  }
 }
 
 void ParticleSkin::set_pinned(const Span<uint8_t> pinned)
@@ -183,18 +189,45 @@ void ParticleSkin::set_pinned(const Span<uint8_t> pinned)
   }
 }
 
-void ParticleSkin::apply(const Span<vec3> particles_wo, const mat4 &head_to_world,
-                         const ColliderSet *colliders, const MutableSpan<vec3> r_points_wo)
+glm::dvec3 ParticleSkin::carried(const int64_t i, const Span<vec3> particles_wo,
+                                 const Span<vec3> directions_wo, const glm::dmat4 &to_world) const
 {
+  const int k = neighbours_num_;
+  glm::dvec3 target(0.0);
+  if (shape_from_particles_) {
+    /* The blend of its particles, each taken along its direction to the point's arc length
+     * (a tip beyond the last particles is not pulled back among them). */
+    for (int a = 0; a < k; a++) {
+      const size_t entry = size_t(i) * size_t(k) + size_t(a);
+      const int32_t j = neighbours_[entry];
+      target += weights_[entry] *
+                (glm::dvec3(particles_wo[j]) + (arc_[size_t(i)] - double(particle_s_[size_t(j)])) *
+                                                   glm::dvec3(directions_wo[j]));
+    }
+    return target;
+  }
+  /* Carried by its particles' displacements, in the head's space. */
+  target = rest_head_[size_t(i)];
+  for (int a = 0; a < k; a++) {
+    const size_t entry = size_t(i) * size_t(k) + size_t(a);
+    target += weights_[entry] * moved_[size_t(neighbours_[entry])];
+  }
+  return glm::dvec3(to_world * glm::dvec4(target, 1.0));
+}
+
+void ParticleSkin::apply(const Span<vec3> particles_wo, const mat4 &head_to_world,
+                         const ColliderSet *colliders, const MutableSpan<vec3> r_points_wo,
+                         const Span<vec3> directions_wo)
+{
+  assert(!shape_from_particles_ || directions_wo.size() == particles_wo.size());
   const glm::dmat4 to_world(head_to_world);
   const glm::dmat4 to_head = glm::inverse(to_world);
-  moved_.resize(particles_rest_head_.size());
+  moved_.resize(shape_from_particles_ ? 0 : particles_rest_head_.size());
   parallel_for(int64_t(moved_.size()), 4096, [&](const IndexRange range) {
     for (int64_t j = range.start; j < range.one_after_last(); j++) {
       moved_[size_t(j)] = transform_point(to_head, particles_wo[j]) - particles_rest_head_[size_t(j)];
     }
   });
-  const int k = neighbours_num_;
   const int64_t curves_num = int64_t(curve_offsets_.size()) - 1;
   parallel_for(curves_num, 64, [&](const IndexRange range) {
     std::vector<glm::dvec3> strand; /* a strand's points while pins move them */
@@ -205,18 +238,12 @@ void ParticleSkin::apply(const Span<vec3> particles_wo, const mat4 &head_to_worl
       strand.assign(size_t(points.size), previous);
       int64_t held = points.start; /* the root, then the last pin */
       for (int64_t i = points.start + 1; i < points.one_after_last(); i++) {
-        /* Carried by its particles' displacements, in the head's space. */
-        glm::dvec3 target = rest_head_[size_t(i)];
-        for (int a = 0; a < k; a++) {
-          const size_t entry = size_t(i) * size_t(k) + size_t(a);
-          target += weights_[entry] * moved_[size_t(neighbours_[entry])];
-        }
         const double rest_length = rest_lengths_[size_t(i)];
         const auto toward = [&](const glm::dvec3 &goal) {
           const glm::dvec3 step = goal - previous;
           return previous + step * (rest_length / std::max(glm::length(step), 1e-12));
         };
-        glm::dvec3 point = toward(glm::dvec3(to_world * glm::dvec4(target, 1.0)));
+        glm::dvec3 point = toward(carried(i, particles_wo, directions_wo, to_world));
         /* Swung out of the body where it went inside (twice at most). */
         for (int attempt = 0; colliders != nullptr && attempt < 2; attempt++) {
           Contact contact;

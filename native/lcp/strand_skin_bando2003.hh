@@ -6,8 +6,14 @@
  * inverse-distance blend of those of the 3 root particles nearest in (u, v). In the head's
  * frame, a point is displaced by the inverse-distance blend of the displacements since rest of
  * its `neighbours_num` nearest particles, so the groom keeps its shape at rest, takes the
- * particles' motion, and the head's own motion is carried exactly. Roots follow the head
- * rigidly; then, root to tip, each point is put at its rest distance from the previous one
+ * particles' motion, and the head's own motion is carried exactly. With `shape_from_particles`
+ * a point is carried to the blend of its particles' positions instead (each taken along its
+ * direction to the point's arc length), so that the strands lie in the volume the billboards
+ * of §4 show, in its shape, with their own lengths. That is for
+ * particles that do not come from the groom (sampled over the scalp in the cantilever shape of
+ * §3.2): their rest shape is not the groom's, and carried by their displacements alone the
+ * strands would keep the groom's shape outside the volume. Roots follow the head rigidly;
+ * then, root to tip, each point is put at its rest distance from the previous one
  * toward where it was carried, or toward the body's surface (up to twice) when that is inside
  * a collider, so strands never stretch nor go through the body. Pinned points (set_pinned,
  * groom/pins.hh) are carried rigidly by the head like the roots: the chain before each one
@@ -30,12 +36,15 @@ class ParticleSkin {
    * points go to the head's space by its inverse). */
   ParticleSkin(Span<int32_t> curve_offsets, Span<vec3> points_wo, Span<vec3> particles_wo,
                Span<vec3> directions_wo, Span<float> u, Span<float> v, Span<float> s,
-               const mat4 &head_to_world, int neighbours_num = 4);
+               const mat4 &head_to_world, int neighbours_num = 4,
+               bool shape_from_particles = false);
 
   /* The strand points for the particles at `particles_wo` and the head at `head_to_world`;
-   * `colliders` (or nullptr) keeps the points out of the body. */
+   * `colliders` (or nullptr) keeps the points out of the body. With shape_from_particles the
+   * particles' directions now are needed too. */
   void apply(Span<vec3> particles_wo, const mat4 &head_to_world, const ColliderSet *colliders,
-             MutableSpan<vec3> r_points_wo);
+             MutableSpan<vec3> r_points_wo, Span<vec3> directions_wo = {});
+  bool shape_from_particles() const { return shape_from_particles_; }
   /* Per groom point, non-zero where it is pinned (roots are whatever the mask says); empty:
    * only the roots. */
   void set_pinned(Span<uint8_t> pinned);
@@ -51,6 +60,13 @@ class ParticleSkin {
   std::vector<int32_t> curve_offsets_;
   std::vector<double> rest_lengths_; /* Of the segment ending at each point (0 at roots). */
   std::vector<glm::dvec3> rest_head_, particles_rest_head_;
+  bool shape_from_particles_ = false;
+  /* With shape_from_particles: each point's arc length and each particle's s. */
+  std::vector<double> arc_;
+  std::vector<float> particle_s_;
+  /* Where point i is carried (world space), before its length is put back. */
+  glm::dvec3 carried(int64_t i, Span<vec3> particles_wo, Span<vec3> directions_wo,
+                     const glm::dmat4 &to_world) const;
   int neighbours_num_ = 4;
   std::vector<int32_t> neighbours_;
   std::vector<double> weights_;

@@ -338,11 +338,24 @@ class Lcp(Method):
         self.collider_set = build.collider_set
         if self.collider_set is not None:  # moves rest particles out of the body: skin after
             self.solver.set_colliders(self.collider_set)
-        self.skin = build.native.ParticleSkin(build.groom, self.solver, build.head_matrix)
+        # Particles sampled over the scalp have the cantilever shape of §3.2, not the groom's:
+        # the strands then take the volume's shape instead of keeping the groom's beside it.
+        self.skin = build.native.ParticleSkin(
+            build.groom,
+            self.solver,
+            build.head_matrix,
+            shape_from_particles=build.settings.lcp_init.particles_from == 'SCALP',
+        )
         if build.groom.pins_num:  # pinned strand points ride on the head, not the particles
             self.skin.set_pinned(build.groom.fixed)
-        self.strand_positions = self.skin.apply(
-            self.solver.positions, build.head_matrix, self.collider_set
+        self.strand_positions = self._skin_strands(build.head_matrix)
+
+    def _skin_strands(self, head_matrix):
+        return self.skin.apply(
+            self.solver.positions,
+            head_matrix,
+            self.collider_set,
+            directions_wo=self.solver.directions,
         )
 
     @staticmethod
@@ -386,9 +399,7 @@ class Lcp(Method):
 
     def step(self, frame_dt, head_matrix):
         self.solver.step(frame_dt, head_matrix)  # refused or diverged: a sentence naming LCP
-        self.strand_positions = self.skin.apply(
-            self.solver.positions, head_matrix, self.collider_set
-        )
+        self.strand_positions = self._skin_strands(head_matrix)
 
     @property
     def positions(self):
