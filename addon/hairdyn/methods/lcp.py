@@ -27,14 +27,15 @@ class HairdynLcpInit(bpy.types.PropertyGroup):
                 'SCALP',
                 "Scalp",
                 "Poisson-disc samples of the hair volume over the scalp's (u, v) and the arc "
-                "length s up to the length map, in a cantilever-beam shape (Bando 2003 §3.2)",
+                "length s up to the length map, in a cantilever-beam shape (Bando 2003 §3.2); "
+                "the strands take that shape",
             ),
             (
                 'GROOM',
                 "Groom",
                 "Samples along the groom's strands: u, v from the root's surface position, s "
                 "from arc length, directions from the tangents (Bando 2003 §3.2); needs no "
-                "scalp",
+                "scalp, and the strands keep the groom's shape",
             ),
         ),
         description="Where LCP's particles start (Bando 2003 §3.2)",
