@@ -371,14 +371,19 @@ def test_set_rows_writes_the_objects_own_array_and_not_a_copys(empty_scene, coun
     for data in (mesh, curves):
         data.attributes.new("vector", 'FLOAT_VECTOR', 'POINT')
         data.attributes.new("scalar", 'FLOAT', 'POINT')
-    collections = [
-        (mesh.attributes["vector"].data, "vector", 3),
-        (mesh.attributes["scalar"].data, "value", 1),
-        (mesh.vertices, "co", 3),
-        (curves.attributes["vector"].data, "vector", 3),
-        (curves.attributes["scalar"].data, "value", 1),
-        (curves.position_data, "vector", 3),
-    ]
+
+    def collections_of(mesh, curves):
+        """(collection, field, width) of every array the test writes."""
+        return [
+            (mesh.attributes["vector"].data, "vector", 3),
+            (mesh.attributes["scalar"].data, "value", 1),
+            (mesh.vertices, "co", 3),
+            (curves.attributes["vector"].data, "vector", 3),
+            (curves.attributes["scalar"].data, "value", 1),
+            (curves.position_data, "vector", 3),
+        ]
+
+    collections = collections_of(mesh, curves)
 
     def rows(width):
         return rng.normal(size=(count, width) if width > 1 else count).astype(np.float32)
@@ -395,14 +400,7 @@ def test_set_rows_writes_the_objects_own_array_and_not_a_copys(empty_scene, coun
     after = [rows(width) for _, _, width in collections]
     for (collection, field, _), values in zip(collections, after):
         bridge.set_rows(collection, field, values)
-    copies = [
-        (mesh_copy.attributes["vector"].data, "vector", 3),
-        (mesh_copy.attributes["scalar"].data, "value", 1),
-        (mesh_copy.vertices, "co", 3),
-        (curves_copy.attributes["vector"].data, "vector", 3),
-        (curves_copy.attributes["scalar"].data, "value", 1),
-        (curves_copy.position_data, "vector", 3),
-    ]
+    copies = collections_of(mesh_copy, curves_copy)
     for (collection, field, width), values in zip(collections, after):
         assert read(collection, field, width).tobytes() == values.tobytes(), field
     for (collection, field, width), values in zip(copies, before):
