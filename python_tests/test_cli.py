@@ -4,6 +4,7 @@ import subprocess
 import sys
 
 import bpy
+import numpy as np
 import pytest
 
 from conftest import FIXTURES, ROOT, host_name
@@ -168,3 +169,75 @@ def test_resume_over_a_directory_frame_exits_1_in_a_real_process(tmp_path):
     assert result.returncode == 1, result.stderr + result.stdout
     assert "frame_000003.npy' is a directory" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def output_positions(hair):
+    """The positions written into the hair object's output curves and output points."""
+    settings = hair.hairdyn
+    curves, mesh = settings.output_curves.data, settings.output_points.data
+    curve_positions = np.empty((len(curves.points), 3), np.float32)
+    curves.points.foreach_get("position", curve_positions.ravel())
+    point_positions = np.empty((len(mesh.vertices), 3), np.float32)
+    mesh.vertices.foreach_get("co", point_positions.ravel())
+    return curve_positions, point_positions
+
+
+@pytest.mark.parametrize("method", ["STRANDS", "LCP"])
+def test_a_headless_run_writes_only_its_last_frame_the_one_a_shown_run_ends_on(open_fixture,
+                                                                               method):
+    """show_frames off (cli.py run and bake): the output objects appear at the last frame, with
+    the positions that writing every frame ends on, and Blender's evaluated copy follows."""
+    from hairdyn import bridge, simulation
+
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    hair.hairdyn.method = method
+    assert hair.hairdyn.output_curves is None
+    runner = simulation.Runner(bpy.context, hair, 1, 4, show_frames=False)
+    for _ in range(3):
+        runner.advance()
+    assert hair.hairdyn.output_curves is None and hair.hairdyn.output_points is None
+    runner.advance()
+    assert runner.done
+    headless = output_positions(hair)
+    evaluated = bridge.read_curves(hair.hairdyn.output_curves,
+                                   bpy.context.evaluated_depsgraph_get()).positions_wo
+    np.testing.assert_allclose(evaluated, headless[0], atol=1e-6)
+
+    simulation.run(bpy.context, hair, 1, 4)  # every frame shown
+    for written, shown in zip(headless, output_positions(hair)):
+        assert written.shape == shown.shape and np.array_equal(written, shown)
+
+
+@pytest.mark.parametrize("failure", ["raises", "not finite"])
+def test_a_headless_run_that_ends_early_shows_its_last_finite_frame(open_fixture, monkeypatch,
+                                                                    failure):
+    """Frame 3 fails (an error, or points that are not finite numbers): the outputs show
+    frame 2, as a run of frames 1-2 writes it."""
+    from hairdyn import simulation
+    from hairdyn.errors import HairdynError
+
+    open_fixture("head_shake.blend")
+    simulation.run(bpy.context, bpy.data.objects["Hair"], 1, 2)
+    expected = output_positions(bpy.data.objects["Hair"])
+
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    step, steps = simulation.Simulation.step, []
+
+    def failing_from_frame_3(self, *args):
+        steps.append(step(self, *args))
+        if len(steps) >= 3:
+            if failure == "raises":
+                raise HairdynError("a stand-in failure")
+            self.nonfinite_num = 1
+        return steps[-1]
+
+    monkeypatch.setattr(simulation.Simulation, "step", failing_from_frame_3)
+    if failure == "raises":
+        with pytest.raises(HairdynError, match="stand-in"):
+            simulation.run(bpy.context, hair, 1, 4, show_frames=False)
+    else:
+        assert simulation.run(bpy.context, hair, 1, 4, show_frames=False)["nan_frames"] == 2
+    for written, frame_2 in zip(output_positions(hair), expected):
+        assert np.array_equal(written, frame_2)

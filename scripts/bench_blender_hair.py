@@ -1,6 +1,8 @@
 """End-to-end benchmark: Blender's built-in hair dynamics against hairdyn's strands on the
 same groom (issue 3): 2,000 strands x 16 segments on the fixture's head, the head as a
-collider, 48 frames, the same substeps per frame. Prints figures and ratios; asserts nothing.
+collider, 48 frames, the same substeps per frame; and hairdyn's whole frame against its stepping,
+headless as cli.py runs it and with every frame shown as the Bake button does (issue 18).
+Prints figures and ratios; asserts nothing.
 
     blender -b blend_fixtures/head_particles.blend --python scripts/bench_blender_hair.py -- [OUT.json]
 """
@@ -50,6 +52,17 @@ def time_blender_hair(scene, body, psys):
     return times
 
 
+def run_hairdyn(body, show_frames):
+    """hairdyn's strands over the frames: the report and the median ms of a whole frame."""
+    frame_s = []
+    runner = simulation.Runner(bpy.context, body, 1, FRAMES, show_frames=show_frames)
+    while not runner.done:
+        start = time.perf_counter()
+        runner.advance()
+        frame_s.append(time.perf_counter() - start)
+    return runner.report(), 1000 * statistics.median(frame_s)
+
+
 def main(out_path):
     if not hasattr(bpy.types.Object, "hairdyn"):
         hairdyn.register()
@@ -68,16 +81,12 @@ def main(out_path):
     settings.method = 'STRANDS'
     settings.strands.substeps = SUBSTEPS
     settings.strands.children_per_guide = 0
-    frame_s = []
-    runner = simulation.Runner(bpy.context, body, 1, FRAMES)
-    while not runner.done:
-        start = time.perf_counter()
-        runner.advance()
-        frame_s.append(time.perf_counter() - start)
-    report = runner.report()
+    # Headless as cli.py runs it (the outputs get the last frame), then every frame shown as
+    # the Bake button does.
+    report, hairdyn_frame_ms = run_hairdyn(body, show_frames=False)
+    shown_report, shown_frame_ms = run_hairdyn(body, show_frames=True)
     blender_ms = 1000 * statistics.median(blender_s)
     hairdyn_step_ms = report["ms_per_frame"]
-    hairdyn_frame_ms = 1000 * statistics.median(frame_s)
     result = {
         "blender_version": bpy.app.version_string,
         "strands": report["strands"], "points": report["points"], "frames": FRAMES,
@@ -87,6 +96,10 @@ def main(out_path):
         "hairdyn_frame_ms_per_frame": hairdyn_frame_ms,
         "ratio_step": blender_ms / hairdyn_step_ms,
         "ratio_frame": blender_ms / hairdyn_frame_ms,
+        "hairdyn_frame_over_step": hairdyn_frame_ms / hairdyn_step_ms,
+        "hairdyn_shown_step_ms_per_frame": shown_report["ms_per_frame"],
+        "hairdyn_shown_frame_ms_per_frame": shown_frame_ms,
+        "hairdyn_shown_frame_over_step": shown_frame_ms / shown_report["ms_per_frame"],
         "hairdyn_penetration_share": report["penetration_share"],
     }
     print(f"bench: {report['strands']} strands x {SEGMENTS} segments, {FRAMES} frames, "
@@ -95,6 +108,11 @@ def main(out_path):
           f"{hairdyn_step_ms:.2f} ms/frame stepping ({result['ratio_step']:.0f}x faster), "
           f"{hairdyn_frame_ms:.1f} ms/frame with reading and writing Blender data "
           f"({result['ratio_frame']:.0f}x)")
+    print(f"bench: hairdyn whole headless run {hairdyn_frame_ms:.2f} ms/frame, "
+          f"{result['hairdyn_frame_over_step']:.2f}x its stepping; every frame shown "
+          f"(the Bake button) {shown_frame_ms:.2f} ms/frame, "
+          f"{result['hairdyn_shown_frame_over_step']:.2f}x its stepping "
+          f"({shown_report['ms_per_frame']:.2f} ms)")
     if out_path:
         Path(out_path).parent.mkdir(parents=True, exist_ok=True)
         Path(out_path).write_text(json.dumps(result, indent=2) + "\n")

@@ -49,7 +49,7 @@ def bake(hair, out_dir, method, frames=None):
     if frames is not None:
         settings.frame_start, settings.frame_end = frames
     bpy.context.view_layer.objects.active = hair
-    runner = baking.start_bake(bpy.context, hair)
+    runner = baking.start_bake(bpy.context, hair, show_frames=False)  # headless: see Runner
     frame_ms = {}
     while not runner.done:
         frame, ms = runner.advance()

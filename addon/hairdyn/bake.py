@@ -55,12 +55,13 @@ def parameters(context, settings):
     return {**properties.settings_dict(settings), "scene_gravity": gravity}
 
 
-def start_bake(context, hair_obj, resume_after=None):
+def start_bake(context, hair_obj, resume_after=None, show_frames=True):
     """A Runner that bakes the object's frame range into its cache.
 
     resume_after=None bakes from the start (an older bake is replaced). resume_after=frame
     keeps the cached frames up to that frame and continues after it; this needs an unbroken
     run of cached frames from the start to there, baked with the same parameters.
+    show_frames: see Runner (off for headless bakes).
     """
     settings = hair_obj.hairdyn
     if resume_after is None:
@@ -83,9 +84,12 @@ def start_bake(context, hair_obj, resume_after=None):
             cache.manifest["frame_end"],
             cache=cache,
             resume_from=last,
+            show_frames=show_frames,
         )
     else:
-        runner = Runner(context, hair_obj, settings.frame_start, settings.frame_end)
+        runner = Runner(
+            context, hair_obj, settings.frame_start, settings.frame_end, show_frames=show_frames
+        )
     try:
         if runner.cache is None:
             runner.cache = _create_cache(runner, directory, settings, baked_with)

@@ -5,7 +5,8 @@ In Blender:        blender -b scene.blend --python addon/hairdyn/cli.py -- run -
 With the bpy module: python addon/hairdyn/cli.py --blend scene.blend run --object Hair ...
 
 `run` simulates into the output objects; `bake` also writes every frame to the cache
-(--cache FOLDER, --resume to continue a bake that stopped); `wedge` bakes a table of parameter
+(--cache FOLDER, --resume to continue a bake that stopped). Nothing draws headless, so the
+output objects get only the last frame (Runner's show_frames); `wedge` bakes a table of parameter
 sets in parallel on Dask (wedge.py); `export` writes a bake to Alembic or USD (export.py).
 
 `--set name=value` sets any property of the object's hairdyn settings by name (enum values
@@ -224,7 +225,7 @@ def _bake(args, obj, start, end):
     if args.cache:
         settings.cache_directory = str(Path(args.cache).resolve())
     resume_after = end if args.resume else None
-    runner = bake.start_bake(bpy.context, obj, resume_after)
+    runner = bake.start_bake(bpy.context, obj, resume_after, show_frames=False)
     try:
         while not runner.done:
             _progress(*runner.advance())
@@ -291,7 +292,7 @@ def _main(args):
     if args.command == "export":
         return _export(args, obj)
     report = _bake(args, obj, start, end) if args.command == "bake" else \
-        simulation.run(bpy.context, obj, start, end, on_frame=_progress)
+        simulation.run(bpy.context, obj, start, end, on_frame=_progress, show_frames=False)
     text = json.dumps(report, indent=2)
     if args.report:
         Path(args.report).write_text(text + "\n")
