@@ -110,6 +110,10 @@ def test_bake_playback_and_reopen(saved_shake):
     assert cache.frames() == list(range(1, 25))
     assert cache.manifest["complete"] and cache.manifest["solver"] == "follow"
     assert cache.manifest["report"]["frames"] == 24
+    # The blocking bake (outputs written at its last frame only) ends showing the frame the
+    # scene was on.
+    frame = bpy.context.scene.frame_current
+    assert np.array_equal(read_output(hair), cache.read_frame(frame)["position"])
     # Scrubbing loads any cached frame into the output objects, backwards too.
     for frame in (20, 3, 12):
         bpy.context.scene.frame_set(frame)

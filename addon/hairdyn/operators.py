@@ -74,12 +74,12 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
     def poll(cls, context):
         return _hair_poll(context)
 
-    def _start(self, context):
+    def _start(self, context, show_frames):
         from . import bake
 
         resume_after = context.scene.frame_current - 1 if self.from_current else None
         self._frame = context.scene.frame_current
-        self._runner = bake.start_bake(context, context.object, resume_after)
+        self._runner = bake.start_bake(context, context.object, resume_after, show_frames)
 
     def _finish(self, context, cancelled):
         from . import bake
@@ -104,8 +104,9 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
 
     @operator_boundary
     def execute(self, context):
-        """Blocking bake (scripts, headless)."""
-        self._start(context)
+        """Blocking bake (scripts, headless): nothing redraws until it ends, so the output
+        objects get only the last frame (Runner's show_frames)."""
+        self._start(context, show_frames=False)
         while not self._runner.done:
             self._runner.advance()
         self._finish(context, cancelled=False)
@@ -113,7 +114,7 @@ class HAIRDYN_OT_bake(bpy.types.Operator):
 
     @operator_boundary
     def invoke(self, context, _event):
-        self._start(context)
+        self._start(context, show_frames=True)  # the viewport follows the bake
         window_manager = context.window_manager
         window_manager.progress_begin(self._runner.frame_start, self._runner.frame_end)
         self._timer = window_manager.event_timer_add(0.001, window=context.window)
