@@ -73,6 +73,29 @@ def test_particle_hair_equals_evaluated_keys(open_fixture):
     assert len(bpy.data.hair_curves) == 0
 
 
+@pytest.mark.parametrize("change", ["children", "another system active"])
+def test_particle_hair_reads_the_parents_whatever_is_shown_and_puts_the_settings_back(
+        open_fixture, change):
+    """read_particle_hair switches on the parents' display (children hide them) and makes the
+    hair system the active one only when it must, and puts both back."""
+    open_fixture("head_particles.blend")
+    body = bpy.data.objects["Body"]
+    expected = bridge.read_particle_hair(body, depsgraph())
+    settings = body.particle_systems[0].settings
+    if change == "children":
+        settings.child_type = 'INTERPOLATED'
+    else:
+        with bpy.context.temp_override(object=body):
+            bpy.ops.object.particle_system_add()
+        assert body.particle_systems.active_index == 1
+    groom = bridge.read_particle_hair(body, depsgraph())
+    assert np.array_equal(groom.curve_offsets, expected.curve_offsets)
+    assert np.abs(groom.positions_wo - expected.positions_wo).max() < 1e-6
+    assert not settings.use_parent_particles
+    assert body.particle_systems.active_index == (0 if change == "children" else 1)
+    assert len(bpy.data.hair_curves) == 0
+
+
 def test_read_collider_mesh(open_fixture):
     open_fixture("head_shake.blend")
     body = bpy.data.objects["Body"]

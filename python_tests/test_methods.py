@@ -261,3 +261,28 @@ def test_panels_show_what_each_method_reads(method, collision, open_fixture):
     for struct_name in methods.get(method).params.values():  # every field but gravity shows
         fields = parameters.shown_fields(getattr(native.load(), struct_name))
         assert {f["name"] for f in fields} <= set(everything), struct_name
+
+
+@pytest.mark.parametrize("points_num, targets_num, k", [(2500, 300, 1), (700, 50, 4), (3, 1, 2)])
+def test_nearest_finds_each_points_nearest_targets_as_a_full_distance_table_does(
+    points_num, targets_num, k
+):
+    """methods.base.nearest (root normals, scalp masks) against the whole table of squared
+    distances, in chunks of 1,024 points: the same targets and the same distance bits, ties
+    of equal distance included (duplicated targets)."""
+    from hairdyn.methods.base import nearest
+
+    rng = np.random.default_rng(points_num)
+    points = rng.normal(size=(points_num, 3))
+    targets = rng.normal(size=(targets_num, 3))
+    targets[targets_num // 2 :] = targets[: targets_num - targets_num // 2]  # exact ties
+    table = ((points[:, None, :] - targets[None, :, :]) ** 2).sum(axis=2)
+    k = min(k, targets_num)
+    indices, distances = nearest(points, targets, k)
+    assert indices.shape == distances.shape == (points_num, k)
+    expected = np.sort(table, axis=1)[:, :k]
+    got = np.sort(np.take_along_axis(table, indices, axis=1), axis=1)
+    assert np.array_equal(got, expected)
+    assert np.array_equal(np.sort(distances, axis=1), np.sqrt(expected))
+    if k == 1:
+        assert np.array_equal(indices[:, 0], table.argmin(axis=1))  # the first of tied ones
