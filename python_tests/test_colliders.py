@@ -34,6 +34,21 @@ def test_default_colliders_and_parts(open_fixture):
     assert built.build_ms > 0
 
 
+def test_particle_hair_collides_with_the_emitter_it_grows_from(open_fixture):
+    """Legacy particle hair: the hair object is the head mesh itself, and the run collides
+    with it (it had been left out as the hair object, so such hair passed through its head)."""
+    scene = open_fixture("head_particles.blend")
+    body = bpy.data.objects["Body"]
+    assert colliders.collider_objects(body, body, scene) == [body]
+    # Its particle system modifier does not change its shape: it follows by its transform.
+    assert colliders.Colliders(body, body, scene, depsgraph()).deforming == [False]
+    body.modifiers.new("Collision", 'COLLISION')
+    assert colliders.Colliders(body, body, scene, depsgraph()).deforming == [False]
+    body.hairdyn.method = 'STRANDS'
+    report = simulation.run(bpy.context, body, 1, 2)
+    assert report["colliders"] == ["Body"]
+
+
 def test_rigid_motion_moves_the_maps_without_rebuilding(open_fixture):
     scene = open_fixture("head_shake.blend")
     hair, body = bpy.data.objects["Hair"], bpy.data.objects["Body"]

@@ -51,7 +51,9 @@ def collider_objects(hair_obj, head, scene):
     found += [item.object for item in settings.colliders if item.object is not None]
     unique = []
     for obj in found:
-        if obj not in unique and obj != hair_obj:
+        # Not the hair object itself, unless it is the head: legacy particle hair grows from
+        # its emitter, the mesh it lies on.
+        if obj not in unique and (obj != hair_obj or obj == head):
             unique.append(obj)
     return unique
 
@@ -67,11 +69,19 @@ def vertex_group_parts(obj, mesh_vertices_num, names):
     return parts or None
 
 
+# Modifiers that never change the mesh they sit on: a particle system (the emitter of
+# particle hair carries one) and Blender's Collision modifier.
+_SHAPE_KEEPING_MODIFIERS = {'PARTICLE_SYSTEM', 'COLLISION'}
+
+
 def may_deform(obj):
     """Whether obj's shape (not just its transform) can change over time: it has modifiers
-    or shape keys. Blender's is_deform_modified() is no help here: it answers for the current
-    frame's values (a Displace of strength 0 "does not deform")."""
-    return bool(obj.modifiers) or obj.data.shape_keys is not None
+    that may change it, or shape keys. Blender's is_deform_modified() is no help here: it
+    answers for the current frame's values (a Displace of strength 0 "does not deform")."""
+    return (
+        any(m.type not in _SHAPE_KEEPING_MODIFIERS for m in obj.modifiers)
+        or obj.data.shape_keys is not None
+    )
 
 
 class Colliders:
