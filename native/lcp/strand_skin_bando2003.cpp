@@ -102,7 +102,7 @@ ParticleSkin::ParticleSkin(const Span<int32_t> curve_offsets, const Span<vec3> p
                            const mat4 &head_to_world, const int neighbours_num,
                            const bool shape_from_particles) :
     curve_offsets_(curve_offsets.begin(), curve_offsets.end()),
-    neighbours_num_(neighbours_num), shape_from_particles_(shape_from_particles)
+    shape_from_particles_(shape_from_particles), neighbours_num_(neighbours_num)
 {
   const int64_t points_num = points_wo.size(), particles_num = particles_wo.size();
   const int64_t curves_num = curve_offsets.size() - 1;
