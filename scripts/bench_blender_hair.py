@@ -99,10 +99,12 @@ def main(out_path):
         "hairdyn_shown_step_ms_per_frame": shown_report["ms_per_frame"],
         "hairdyn_shown_frame_ms_per_frame": shown_frame_ms,
         "hairdyn_shown_frame_over_step": shown_frame_ms / shown_report["ms_per_frame"],
+        "hairdyn_colliders": report["colliders"],
         "hairdyn_penetration_share": report["penetration_share"],
     }
     print(f"bench: {report['strands']} strands x {SEGMENTS} segments, {FRAMES} frames, "
-          f"{SUBSTEPS} substeps, Blender {bpy.app.version_string}")
+          f"{SUBSTEPS} substeps, colliding with {', '.join(report['colliders']) or 'nothing'}, "
+          f"Blender {bpy.app.version_string}")
     print(f"bench: Blender hair dynamics {blender_ms:.1f} ms/frame; hairdyn strands "
           f"{hairdyn_step_ms:.2f} ms/frame stepping ({result['ratio_step']:.0f}x faster), "
           f"{hairdyn_frame_ms:.1f} ms/frame in all, set-up, reading and writing included "
