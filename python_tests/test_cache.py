@@ -377,3 +377,37 @@ def test_a_frame_cut_short_or_reordered_is_refused(tmp_path):
     path.write_bytes(whole)
     assert cache.read_frame(1, reuse=True)["position"].tobytes() == \
         frame_data()["position"].tobytes()
+
+
+@pytest.mark.parametrize("fixture, hair_name", [("head_shake.blend", "Hair"),
+                                                ("head_particles.blend", "Body")])
+def test_the_outputs_replace_the_groom_in_renders(open_fixture, fixture, hair_name):
+    """Once output curves show the simulated hair, the groom itself leaves the renders (a
+    Curves object by its render switch, particle hair by its particle system's: the emitter
+    still renders); the artist can keep it, and the switch is no solver parameter (a bake
+    resumes across it)."""
+    from hairdyn import bake, simulation
+
+    open_fixture(fixture)
+    hair = bpy.data.objects[hair_name]
+    hair.hairdyn.method = 'STRANDS'
+    systems = bridge.hair_system_modifiers(hair)
+    assert (hair.type == 'CURVES') != bool(systems)
+
+    def in_renders():
+        if hair.type == 'CURVES':
+            return not hair.hide_render
+        assert not hair.hide_render  # the emitter is never hidden
+        return all(modifier.show_render for modifier in systems)
+
+    hair.hairdyn.hide_source_in_renders = True  # nothing to replace it yet
+    assert in_renders()
+    simulation.run(bpy.context, hair, 1, 2)
+    assert not in_renders()
+    hair.hairdyn.hide_source_in_renders = False
+    assert in_renders()
+    simulation.run(bpy.context, hair, 1, 2)
+    assert in_renders()
+    hair.hairdyn.hide_source_in_renders = True
+    assert not in_renders()
+    assert "hide_source_in_renders" not in bake.parameters(bpy.context, hair.hairdyn)

@@ -242,7 +242,6 @@ def run(out_dir, method='STRANDS', size=(1280, 720), samples=64, video_size=(640
     (out_dir / "demo_report.json").write_text(json.dumps(report, indent=2) + "\n")
 
     start = time.perf_counter()
-    hair.hide_render = True  # the simulated outputs replace the groom
     video = render_video(scene, out_dir / "demo_", frame_ms, video_size, color)
     video_s = time.perf_counter() - start
     target = video.with_name("demo.mp4")

@@ -134,6 +134,17 @@ def hair_particle_system(obj):
     return next((psys for psys in systems if psys.settings.type == 'HAIR'), None)
 
 
+def hair_system_modifiers(obj):
+    """The object's particle system modifiers that carry hair (none for a Curves object)."""
+    return [
+        modifier
+        for modifier in getattr(obj, "modifiers", ())
+        if modifier.type == 'PARTICLE_SYSTEM'
+        and modifier.particle_system is not None
+        and modifier.particle_system.settings.type == 'HAIR'
+    ]
+
+
 def is_hair_object(obj):
     """Curves objects, and meshes that carry a hair particle system."""
     return obj is not None and (obj.type == 'CURVES' or hair_particle_system(obj) is not None)

@@ -55,3 +55,16 @@ def write(hair_obj, frame):
             )
             if output["billboards"] and settings.use_billboards:
                 billboards.ensure(target, bpy.context.scene.camera)
+    if settings.hide_source_in_renders:
+        hide_source(hair_obj, True)
+
+
+def hide_source(hair_obj, hidden):
+    """The groom's own hair in or out of renders, where the outputs show it simulated: the
+    Curves object, or the emitter's hair particle systems (the emitter itself still renders).
+    Changes only what differs, so a frame that finds it hidden costs nothing."""
+    if hair_obj.type == 'CURVES' and hair_obj.hide_render != hidden:
+        hair_obj.hide_render = hidden
+    for modifier in bridge.hair_system_modifiers(hair_obj):
+        if modifier.show_render == hidden:
+            modifier.show_render = not hidden

@@ -38,6 +38,15 @@ class HairdynColliderItem(bpy.types.PropertyGroup):
     )
 
 
+def _source_visibility_changed(settings):
+    from . import outputs
+
+    hair_obj = settings.id_data
+    outputs.hide_source(
+        hair_obj, settings.hide_source_in_renders and settings.output_curves is not None
+    )
+
+
 class HairdynSettings(bpy.types.PropertyGroup):
     enabled: BoolProperty(
         name="hairdyn",
@@ -104,6 +113,14 @@ class HairdynSettings(bpy.types.PropertyGroup):
         type=bpy.types.Object,
         description="Curves object that receives the simulated strands every frame "
         "(created when empty)",
+    )
+    hide_source_in_renders: BoolProperty(
+        name="Hide Source",
+        default=True,
+        update=lambda settings, _context: _source_visibility_changed(settings),
+        description="Leave this object's own groom out of renders once the output curves show "
+        "the simulated hair (they take its material). Particle hair: its particle systems, "
+        "the emitter still renders",
     )
     output_points: PointerProperty(
         name="Output Points",
@@ -243,6 +260,7 @@ _NOT_PARAMETERS = frozenset(
         "use_billboards",
         "output_curves",
         "output_points",
+        "hide_source_in_renders",
         "cache_directory",
         "use_cache",
         "use_live",

@@ -212,14 +212,8 @@ class HairSystemsOff:
     def __init__(self, hair_obj):
         self.obj = hair_obj
         self.names = []
-        for modifier in getattr(hair_obj, "modifiers", ()):
-            system = getattr(modifier, "particle_system", None)
-            if (
-                modifier.type == 'PARTICLE_SYSTEM'
-                and modifier.show_viewport
-                and system is not None
-                and system.settings.type == 'HAIR'
-            ):
+        for modifier in bridge.hair_system_modifiers(hair_obj):
+            if modifier.show_viewport:
                 modifier.show_viewport = False
                 self.names.append(modifier.name)
 

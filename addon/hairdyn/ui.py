@@ -212,6 +212,7 @@ class HAIRDYN_PT_output(_SubPanel, bpy.types.Panel):
     def draw_settings(self, layout, settings):
         layout.prop(settings, "output_curves")
         layout.prop(settings, "output_points")
+        layout.prop(settings, "hide_source_in_renders")
         method = methods.get(settings.method)
         for name in method.shows if method is not None else ():
             layout.prop(settings, name)
