@@ -42,6 +42,7 @@ class HAIRDYN_OT_simulate(bpy.types.Operator):
                 settings.frame_start,
                 settings.frame_end,
                 on_frame=lambda f, _ms: window_manager.progress_update(f),
+                show_frames=False,  # blocking: nothing redraws until it ends
             )
         finally:
             window_manager.progress_end()
