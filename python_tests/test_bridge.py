@@ -452,3 +452,34 @@ def test_points_output_positions_and_texture_space_are_blenders(empty_scene, cou
         assert back.tobytes() == positions.tobytes()
         assert tuple(mesh.texspace_location) == tuple(reference.texspace_location)
         assert tuple(mesh.texspace_size) == tuple(reference.texspace_size)
+
+
+@pytest.mark.parametrize("close_tip", [False, True])
+def test_particle_hairs_output_curves_take_its_material_and_the_radius_cycles_renders(
+        open_fixture, close_tip):
+    """Particle hair keeps its look in the output curves: the material of its system's slot,
+    and per point the radius Cycles gives particle hair (radius_scale / 2 times the root and
+    tip factors, blended by the shape: r = (1 - t)^(1 / (1 - shape)) (root - tip) + tip)."""
+    from hairdyn import simulation
+
+    open_fixture("head_particles.blend")
+    body = bpy.data.objects["Body"]
+    hair_material = bpy.data.materials.new("Hair")
+    body.data.materials.append(hair_material)
+    settings = body.particle_systems[0].settings
+    settings.material = len(body.material_slots)
+    settings.radius_scale, settings.root_radius, settings.tip_radius = 0.02, 1.5, 0.25
+    settings.shape, settings.use_close_tip = 0.3, close_tip
+    body.hairdyn.method = 'FOLLOW'
+    simulation.run(bpy.context, body, 1, 1)
+    curves = body.hairdyn.output_curves.data
+    assert [m.name for m in curves.materials] == ["Hair"]
+    radius = np.empty(len(curves.points), dtype=np.float32)
+    curves.attributes["radius"].data.foreach_get("value", radius)
+    sizes = np.diff(bridge._curve_offsets(curves))
+    t = np.concatenate([np.linspace(0.0, 1.0, n) for n in sizes])
+    expected = (1.0 - t) ** (1.0 / 0.7) * (0.015 - 0.0025) + 0.0025
+    if close_tip:
+        expected[np.cumsum(sizes) - 1] = 0.0
+    assert np.allclose(radius, expected, rtol=1e-5, atol=1e-8)
+    assert radius[0] == pytest.approx(0.015)

@@ -533,21 +533,42 @@ def _topology_matches(curves, curve_offsets):
     return np.array_equal(_curve_offsets(curves), curve_offsets)
 
 
-def tapered_radius(sizes, root_radius):
-    """Per point of curves of these point counts: root_radius at the root, tapering linearly
-    to a fifth of it at the tip (a single hair; the groom's own radius is a guide's)."""
+def _along_strands(sizes):
+    """Per point of curves of these point counts: its place along its strand, 0 at the root
+    and 1 at the tip."""
     sizes = np.asarray(sizes, dtype=np.int64)
     starts = np.repeat(np.cumsum(sizes) - sizes, sizes)
     steps = np.repeat(np.maximum(sizes - 1, 1), sizes)
-    t = (np.arange(int(sizes.sum())) - starts) / steps  # 0 at each root, 1 at each tip
-    return (root_radius * (1.0 - 0.8 * t)).astype(np.float32)
+    return (np.arange(int(sizes.sum())) - starts) / steps
+
+
+def tapered_radius(sizes, root_radius):
+    """Per point of curves of these point counts: root_radius at the root, tapering linearly
+    to a fifth of it at the tip (a single hair; the groom's own radius is a guide's)."""
+    return (root_radius * (1.0 - 0.8 * _along_strands(sizes))).astype(np.float32)
+
+
+def particle_hair_radius(sizes, settings):
+    """Per point of curves of these point counts, the radius Cycles renders particle hair with
+    (ParticleSettings `settings`; Cycles' blender/curves.cpp): radius_scale / 2 times the root
+    and tip factors, blended along the strand by its shape, the tip closed to 0 when asked."""
+    t = _along_strands(sizes)
+    half = 0.5 * settings.radius_scale
+    root, tip = half * settings.root_radius, half * settings.tip_radius
+    shape = settings.shape  # in [-1, 1]
+    exponent = 1.0 + shape if shape < 0.0 else 1.0 / max(1.0 - shape, 1e-6)
+    radius = (1.0 - t) ** exponent * (root - tip) + tip
+    if settings.use_close_tip:
+        radius[t >= 1.0] = 0.0
+    return radius.astype(np.float32)
 
 
 def ensure_curves_output(obj, name, curve_offsets, like=None):
     """`obj` if it is a Curves object with this topology, otherwise a new one named `name`.
 
     The new object sits at the world origin (positions are written in world space), in the
-    collection of `like`, with `like`'s materials and strand radius.
+    collection of `like`, with `like`'s materials and strand radius (particle hair: its
+    system's material and the radius Cycles renders it with).
     """
     if obj is not None and obj.type == 'CURVES' and _topology_matches(obj.data, curve_offsets):
         return obj
@@ -562,6 +583,14 @@ def ensure_curves_output(obj, name, curve_offsets, like=None):
             if len(values) != len(curves.points):  # child hairs: thinner, tapering
                 values = tapered_radius(np.diff(curve_offsets), 0.5 * float(values.min()))
             curves.attributes.new("radius", 'FLOAT', 'POINT').data.foreach_set("value", values)
+    elif hair_particle_system(like) is not None:
+        # Particle hair: its system's material slot and the radius Cycles gives it.
+        settings = hair_particle_system(like).settings
+        slots = like.material_slots
+        if 1 <= settings.material <= len(slots) and slots[settings.material - 1].material:
+            curves.materials.append(slots[settings.material - 1].material)
+        values = particle_hair_radius(np.diff(curve_offsets), settings)
+        curves.attributes.new("radius", 'FLOAT', 'POINT').data.foreach_set("value", values)
     new_obj = bpy.data.objects.new(name, curves)
     _link_like(new_obj, like)
     return new_obj
