@@ -573,6 +573,7 @@ def ensure_curves_output(obj, name, curve_offsets, like=None):
     if obj is not None and obj.type == 'CURVES' and _topology_matches(obj.data, curve_offsets):
         return obj
     curves = new_curves_data(name, np.diff(curve_offsets))
+    particle_hair = hair_particle_system(like)
     if like is not None and like.type == 'CURVES':
         for material in like.data.materials:
             curves.materials.append(material)
@@ -583,9 +584,9 @@ def ensure_curves_output(obj, name, curve_offsets, like=None):
             if len(values) != len(curves.points):  # child hairs: thinner, tapering
                 values = tapered_radius(np.diff(curve_offsets), 0.5 * float(values.min()))
             curves.attributes.new("radius", 'FLOAT', 'POINT').data.foreach_set("value", values)
-    elif hair_particle_system(like) is not None:
+    elif particle_hair is not None:
         # Particle hair: its system's material slot and the radius Cycles gives it.
-        settings = hair_particle_system(like).settings
+        settings = particle_hair.settings
         slots = like.material_slots
         if 1 <= settings.material <= len(slots) and slots[settings.material - 1].material:
             curves.materials.append(slots[settings.material - 1].material)
