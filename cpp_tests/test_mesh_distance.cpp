@@ -214,6 +214,40 @@ TEST(MeshDistance, RepeatedDepthsSkipOnlyPointsThatStayedOut)
   EXPECT_GT(inside_num, 1000) << "the cloud must reach into the sphere";
 }
 
+/* Points carried with the mesh (roots on a turning head) come back to object space a rounding
+ * apart each frame, and keep their first answer: within that rounding of a fresh query, the
+ * ones inside counted inside every frame. */
+TEST(MeshDistance, RepeatedDepthsOfPointsCarriedWithTheMesh)
+{
+  const TestMesh m = uv_sphere(1.0f, 48, 24);
+  const MeshDistance distance(m.vertices, m.triangles);
+  std::mt19937 rng(9);
+  std::normal_distribution<float> gauss;
+  /* On the surface, just inside and just outside, in object space. */
+  std::vector<vec3> carried(600);
+  for (size_t i = 0; i < carried.size(); i++) {
+    const vec3 direction = glm::normalize(vec3(gauss(rng), gauss(rng), gauss(rng)));
+    carried[i] = (0.99f + 0.01f * float(i % 3)) * direction;
+  }
+  const float slack = 1e-5f * 2.0f * std::sqrt(3.0f); /* as accumulate_depths, for this box */
+  for (int frame = 0; frame < 40; frame++) {
+    const mat4 object_to_world = glm::translate(mat4(1.0f), vec3(0.37f * float(frame), 0, 0)) *
+                                 glm::rotate(mat4(1.0f), 0.11f * float(frame), vec3(0, 1, 1));
+    std::vector<vec3> points;
+    for (const vec3 &p : carried) {
+      points.push_back(transform_point(object_to_world, p));
+    }
+    std::vector<float> depths(points.size(), 0.0f);
+    accumulate_penetration_depths(distance, object_to_world, points, depths);
+    const mat4 world_to_object = glm::inverse(object_to_world);
+    for (size_t i = 0; i < points.size(); i++) {
+      const float expected = distance.depth(transform_point(world_to_object, points[i]));
+      ASSERT_NEAR(depths[i], expected, slack) << "frame " << frame << ", point " << i;
+      ASSERT_EQ(depths[i] > 0.005f, i % 3 == 0) << "frame " << frame << ", point " << i;
+    }
+  }
+}
+
 /* A segment's samples deeper than a tolerance, found with the queries the Lipschitz bound
  * leaves (deeper_on_segment), give each sample's own answer: 20,000 random segments of up to
  * 1 m through and around a sphere of 1 m, 1 to 64 samples, tolerances 0 to 0.2 m. */

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/parallel.hh"
 
@@ -132,7 +133,7 @@ void MeshDistance::accumulate_depths(const mat4 &world_to_object, const float sc
   std::vector<float> &bound = bounds_->distances;
   if (reference.size() != size_t(points_wo.size())) {
     reference.assign(size_t(points_wo.size()), vec3(0.0f));
-    bound.assign(size_t(points_wo.size()), -1.0f); /* nothing known */
+    bound.assign(size_t(points_wo.size()), std::numeric_limits<float>::quiet_NaN()); /* unknown */
   }
   const vec3 lo = bvh_.bounds_min(), hi = bvh_.bounds_max();
   /* What float rounding of a distance may miss, in object units. */
@@ -140,12 +141,21 @@ void MeshDistance::accumulate_depths(const mat4 &world_to_object, const float sc
   parallel_for(points_wo.size(), 256, [&](const IndexRange range) {
     for (int64_t i = range.start; i < range.one_after_last(); i++) {
       const vec3 p = transform_point(world_to_object, points_wo[i]);
-      if (bound[size_t(i)] - glm::length(p - reference[size_t(i)]) > slack) {
+      const float moved = glm::length(p - reference[size_t(i)]);
+      if (bound[size_t(i)] - moved > slack) {
         continue; /* still outside */
+      }
+      if (moved <= slack && !std::isnan(bound[size_t(i)])) {
+        /* Within rounding of where it was asked (a root carried with the head, which the
+         * transform's rounding moves by 1e-7): that answer, off by at most `moved`; the
+         * reference stays, so the drift never adds up past the slack. A positive bound is no
+         * depth either way. */
+        r_depth[i] = std::max(r_depth[i], std::max(-bound[size_t(i)], 0.0f) * scale);
+        continue;
       }
       float distance;
       if (!is_finite(p)) {
-        distance = -1.0f;
+        distance = std::numeric_limits<float>::quiet_NaN(); /* unknown: asked again */
       }
       else if (p.x < lo.x || p.y < lo.y || p.z < lo.z || p.x > hi.x || p.y > hi.y || p.z > hi.z) {
         /* Outside the bounding box: the distance to the box bounds the distance to the mesh. */

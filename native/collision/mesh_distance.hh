@@ -35,7 +35,9 @@ class MeshDistance {
    * distance is 1-Lipschitz (|S(p) − S(q)| ≤ |p − q|), so a point that cannot have reached the
    * surface since (bound − distance moved > 0) is outside without a query. Hair moves
    * millimetres per frame and mostly stays centimetres out, so most queries of a frame's
-   * penetration report are skipped; the depths are the same. Safe from several threads. */
+   * penetration report are skipped, and the depths are the same. A point within rounding
+   * (1e-5 of the mesh's size) of where it was last asked, as a root carried with the head
+   * is, keeps that answer, off by at most that distance. Safe from several threads. */
   void accumulate_depths(const mat4 &world_to_object, float scale, Span<vec3> points_wo,
                          MutableSpan<float> r_depth) const;
   const TriangleBVH &bvh() const { return bvh_; }
@@ -44,7 +46,8 @@ class MeshDistance {
   struct Bounds {
     std::mutex mutex;
     std::vector<vec3> points;     /* object space */
-    std::vector<float> distances; /* lower bounds of the signed distance there */
+    std::vector<float> distances; /* the signed distance there, or a lower bound of it
+                                   * where positive (NaN: unknown) */
   };
   std::shared_ptr<Bounds> bounds_ = std::make_shared<Bounds>();
 
