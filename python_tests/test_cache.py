@@ -411,3 +411,26 @@ def test_the_outputs_replace_the_groom_in_renders(open_fixture, fixture, hair_na
     hair.hairdyn.hide_source_in_renders = True
     assert not in_renders()
     assert "hide_source_in_renders" not in bake.parameters(bpy.context, hair.hairdyn)
+
+
+def test_an_output_deleted_from_the_scene_is_made_again_not_written_unseen(open_fixture):
+    """Deleting an output object in the outliner takes it out of every scene, but the settings'
+    pointer keeps it alive: the next run makes new outputs in the scene, and the groom, hidden
+    from renders behind them, is hidden behind outputs that render."""
+    from hairdyn import simulation
+
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    hair.hairdyn.method = 'STRANDS'
+    simulation.run(bpy.context, hair, 1, 2)
+    deleted = [hair.hairdyn.output_curves, hair.hairdyn.output_points]
+    for obj in deleted:
+        for collection in obj.users_collection:
+            collection.objects.unlink(obj)
+        assert not obj.users_scene
+    deleted_positions = read_output(hair).copy()
+    simulation.run(bpy.context, hair, 1, 3)
+    for new, old in zip([hair.hairdyn.output_curves, hair.hairdyn.output_points], deleted):
+        assert new != old and new.users_scene
+    assert not np.array_equal(read_output(hair), deleted_positions)
+    assert hair.hide_render  # behind outputs that render

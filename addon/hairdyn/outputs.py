@@ -34,19 +34,16 @@ def write(hair_obj, frame):
                 continue
             kind, suffix = SLOTS[slot]
             target_name = f"{hair_obj.name}{suffix}"
+            current = _in_a_scene(getattr(settings, slot))
             if kind == "curves":
-                target = bridge.ensure_curves_output(
-                    getattr(settings, slot), target_name, offsets, like=hair_obj
-                )
+                target = bridge.ensure_curves_output(current, target_name, offsets, like=hair_obj)
                 setattr(settings, slot, target)
                 bridge.write_curves(target, arrays["position"])
                 bridge.write_point_attributes(  # velocity, shell_normal, lod_level...
                     target.data, {k: v for k, v in arrays.items() if k != "position"}
                 )
                 continue
-            target = bridge.ensure_points_output(
-                getattr(settings, slot), target_name, like=hair_obj
-            )
+            target = bridge.ensure_points_output(current, target_name, like=hair_obj)
             setattr(settings, slot, target)
             bridge.write_points(
                 target,
@@ -57,6 +54,12 @@ def write(hair_obj, frame):
                 billboards.ensure(target, bpy.context.scene.camera)
     if settings.hide_source_in_renders:
         hide_source(hair_obj, True)
+
+
+def _in_a_scene(obj):
+    """obj, or None when no scene holds it: the artist deleted it (the settings' pointer
+    keeps it alive), and a new one takes its place rather than frames nobody sees."""
+    return obj if obj is not None and obj.users_scene else None
 
 
 def hide_source(hair_obj, hidden):

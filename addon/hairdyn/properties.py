@@ -42,9 +42,9 @@ def _source_visibility_changed(settings):
     from . import outputs
 
     hair_obj = settings.id_data
-    outputs.hide_source(
-        hair_obj, settings.hide_source_in_renders and settings.output_curves is not None
-    )
+    output = settings.output_curves
+    replaced = output is not None and bool(output.users_scene)
+    outputs.hide_source(hair_obj, settings.hide_source_in_renders and replaced)
 
 
 class HairdynSettings(bpy.types.PropertyGroup):
