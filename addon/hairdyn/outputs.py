@@ -52,14 +52,22 @@ def write(hair_obj, frame):
             )
             if output["billboards"] and settings.use_billboards:
                 billboards.ensure(target, bpy.context.scene.camera)
-    if settings.hide_source_in_renders:
-        hide_source(hair_obj, True)
+    if settings.hide_source_in_renders:  # writing never puts the groom back
+        show_source_as_set(hair_obj)
 
 
 def _in_a_scene(obj):
     """obj, or None when no scene holds it: the artist deleted it (the settings' pointer
     keeps it alive), and a new one takes its place rather than frames nobody sees."""
     return obj if obj is not None and obj.users_scene else None
+
+
+def show_source_as_set(hair_obj):
+    """The groom out of renders while output curves in a scene show it simulated and Hide
+    Source is on, else back in (hide_source)."""
+    settings = hair_obj.hairdyn
+    replaced = _in_a_scene(settings.output_curves) is not None
+    hide_source(hair_obj, settings.hide_source_in_renders and replaced)
 
 
 def hide_source(hair_obj, hidden):

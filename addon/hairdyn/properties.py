@@ -20,7 +20,7 @@ from bpy.props import (
     StringProperty,
 )
 
-from . import methods, native, parameters
+from . import methods, native, outputs, parameters
 from .methods.base import object_poll
 
 # Groups not tied to one method: the colliders' maps and response, the wind (core/wind.hh).
@@ -36,15 +36,6 @@ class HairdynColliderItem(bpy.types.PropertyGroup):
         poll=object_poll('MESH'),
         description="A mesh the hair collides with",
     )
-
-
-def _source_visibility_changed(settings):
-    from . import outputs
-
-    hair_obj = settings.id_data
-    output = settings.output_curves
-    replaced = output is not None and bool(output.users_scene)
-    outputs.hide_source(hair_obj, settings.hide_source_in_renders and replaced)
 
 
 class HairdynSettings(bpy.types.PropertyGroup):
@@ -117,7 +108,7 @@ class HairdynSettings(bpy.types.PropertyGroup):
     hide_source_in_renders: BoolProperty(
         name="Hide Source",
         default=True,
-        update=lambda settings, _context: _source_visibility_changed(settings),
+        update=lambda settings, _context: outputs.show_source_as_set(settings.id_data),
         description="Leave this object's own groom out of renders once the output curves show "
         "the simulated hair (they take its material). Particle hair: its particle systems, "
         "the emitter still renders",
