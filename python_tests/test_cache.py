@@ -434,3 +434,29 @@ def test_an_output_deleted_from_the_scene_is_made_again_not_written_unseen(open_
         assert new != old and new.users_scene
     assert not np.array_equal(read_output(hair), deleted_positions)
     assert hair.hide_render  # behind outputs that render
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+def test_a_groom_hidden_behind_outputs_returns_to_renders_when_they_are_deleted(
+    open_fixture, enabled
+):
+    """The groom leaves the renders behind its outputs; if the artist then deletes them (with
+    hairdyn on or off, so that nothing writes a frame), the next frame change, which every
+    render makes, puts the groom back: a render never loses the hair."""
+    from hairdyn import simulation
+
+    open_fixture("head_shake.blend")
+    hair = bpy.data.objects["Hair"]
+    hair.hairdyn.method = 'STRANDS'
+    simulation.run(bpy.context, hair, 1, 2)
+    assert hair.hide_render
+    hair.hairdyn.enabled = enabled
+    hair.hairdyn.use_live = False  # nothing would write: the cache is empty too
+    playback.on_frame_change(bpy.context.scene)
+    assert hair.hide_render  # still behind outputs in the scene
+    for obj in (hair.hairdyn.output_curves, hair.hairdyn.output_points):
+        for collection in obj.users_collection:
+            collection.objects.unlink(obj)
+    playback.on_frame_change(bpy.context.scene)
+    assert not hair.hide_render
+    assert playback.last_error(hair) is None

@@ -173,10 +173,16 @@ def on_frame_change(scene, depsgraph=None):
     _unique_identities(scene)
     for obj in scene.objects:
         settings = obj.hairdyn
-        if not settings.enabled or not bridge.is_hair_object(obj):
+        enabled = settings.enabled and bridge.is_hair_object(obj)
+        if not enabled and settings.output_curves is None:
             continue
         key = identity(obj)
         try:
+            # The groom back in renders once the outputs it hides behind left the scene (the
+            # artist deleted them), hairdyn on or off: renders, stills too, change frames.
+            outputs.show_source_as_set(obj)
+            if not enabled:
+                continue
             with simulation.moving_frames():  # reading hair may evaluate the scene: no re-entry
                 shown = (
                     settings.use_cache and load_frame(obj, scene.frame_current, depsgraph)
