@@ -807,3 +807,72 @@ TEST(LodSolver, PlacedStrandsStayOutOfTheHead)
     }
   }
 }
+
+TEST(LodSolver, StripsAsRibbons)
+{
+  /* Each strip node's ribbon: its skeleton widened both ways by its half width, turned with
+   * the skeleton's frames; a strip that is not active collapses onto a root of its strands. */
+  Scene scene(scene_params());
+  const LodSolver &solver = scene.solver;
+  const LodHierarchy &hierarchy = solver.hierarchy();
+  const int32_t n = hierarchy.skeleton_points_num();
+  const int64_t strips = int64_t(solver.strip_nodes().size());
+  ASSERT_GT(strips, hierarchy.top_nodes_num()); /* the top strips and their halves */
+  std::vector<vec3> ribbons(size_t(strips * 2 * n));
+  const auto check = [&](const mat4 &head_to_world, const bool at_rest) -> int64_t {
+    scene.solver.strip_ribbons(ribbons);
+    int64_t shown = 0;
+    for (int64_t s = 0; s < strips; s++) {
+      const int32_t node = solver.strip_nodes()[size_t(s)];
+      EXPECT_EQ(hierarchy.kind(node), LodKind::Strip);
+      const vec3 *ribbon = ribbons.data() + s * 2 * n;
+      if (!solver.active()[size_t(node)]) {
+        const int32_t strand = hierarchy.strands(node)[0];
+        for (int32_t v = 0; v < 2 * n; v++) {
+          EXPECT_EQ(ribbon[v], solver.positions()[hierarchy.curve_offsets()[strand]]);
+        }
+        continue;
+      }
+      shown++;
+      for (int32_t k = 0; k < n; k++) {
+        const vec3 half_width = hierarchy.half_width(node)[k];
+        const vec3 side = 0.5f * (ribbon[2 * k + 1] - ribbon[2 * k]);
+        EXPECT_NEAR(
+            glm::length(0.5f * (ribbon[2 * k] + ribbon[2 * k + 1]) - solver.skeleton(node)[k]),
+            0.0f, 1e-6f);
+        EXPECT_NEAR(glm::length(side), glm::length(half_width), 1e-6f);
+        if (at_rest) { /* the rest ribbon carried by the head */
+          const vec3 rest = hierarchy.rest_skeleton(node)[k];
+          EXPECT_NEAR(
+              glm::length(ribbon[2 * k + 1] - vec3(head_to_world * vec4(rest + half_width, 1.0f))),
+              0.0f, 1e-5f);
+        }
+        /* In the skeleton's frames the side is what it was at rest: it turns as they do. */
+        EXPECT_NEAR(glm::length(glm::transpose(solver.frames(node)[k]) * side -
+                                glm::transpose(hierarchy.rest_frames(node)[k]) * half_width),
+                    0.0f, 1e-6f);
+      }
+    }
+    return shown;
+  };
+  const mat4 turned = glm::translate(glm::rotate(mat4(1.0f), 0.7f, vec3(0.3f, 0.2f, 1.0f)),
+                                     vec3(0.1f, -0.2f, 0.05f));
+  scene.solver.reset(turned);
+  EXPECT_EQ(check(turned, true), hierarchy.top_nodes_num());
+  float widest = 0.0f;
+  for (const int32_t node : solver.strip_nodes()) {
+    for (const vec3 &half_width : hierarchy.half_width(node)) {
+      widest = std::max(widest, glm::length(half_width));
+    }
+  }
+  EXPECT_GT(widest, 0.01f); /* strips wide enough to tell the sides apart */
+  scene.solver.reset(head);
+  for (int frame = 0; frame < 4; frame++) {
+    scene.step(far_eye); /* settling under gravity, the top strips */
+  }
+  EXPECT_EQ(check(head, false), hierarchy.top_nodes_num());
+  scene.step(close_eye); /* the strips split into their halves, and further into clusters */
+  const int64_t shown = check(head, false);
+  EXPECT_LT(shown, hierarchy.top_nodes_num() * 2 + 1);
+  EXPECT_GT(scene.solver.splits_num(), 0);
+}

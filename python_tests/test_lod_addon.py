@@ -245,3 +245,72 @@ def test_the_curves_radius_attribute_sizes_the_group_volumes(open_fixture):
 
     none, thin, thick = run_with(None), run_with(0.25), run_with(4.0)
     assert thin["hair_hair_pairs"] < none["hair_hair_pairs"] < thick["hair_hair_pairs"]
+
+
+def ribbon_vertices(strips_obj):
+    """(ribbons, 2 n, 3): the strips mesh's vertices, ribbon by ribbon (faces of 4)."""
+    mesh = strips_obj.data
+    positions = np.empty((len(mesh.vertices), 3), dtype=np.float32)
+    mesh.vertices.foreach_get("co", positions.ravel())
+    corners = np.empty(4 * len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("vertices", corners)
+    return positions, corners.reshape(-1, 4)
+
+
+def test_ribbon_faces_join_each_pair_of_vertices_to_the_next():
+    from hairdyn import bridge
+
+    assert bridge.ribbon_faces([0, 4, 10]).tolist() == [
+        [0, 1, 3, 2],
+        [4, 5, 7, 6],
+        [6, 7, 9, 8],
+    ]
+
+
+def test_strips_show_as_ribbons_when_asked_and_play_back(saved_fixture):
+    """Every strip of the hierarchy is a ribbon of the Output Strips mesh (a quad between each
+    skeleton point's pair of vertices and the next), made hidden and shown while Strips as
+    Ribbons is on; the strips not driving hair have no area; a bake plays them back."""
+    hair = saved_fixture("head_curves.blend", 2)
+    settings = hair.hairdyn
+    settings.method = 'STRANDS'
+    settings.strands.children_per_guide = 0
+    settings.lod.enabled = True
+    settings.lod.velocity_slow, settings.lod.velocity_fast = 50.0, 100.0  # distance decides
+    settings.lod_options.camera = camera_facing_hair(hair, 40.0)  # the top strips alone
+    report = simulation.run(bpy.context, hair, 1, 2)
+    strips = settings.output_strips
+    assert strips.name == "Hair_hairdyn_strips" and strips.users_scene
+    assert strips.hide_render and strips.hide_viewport  # until asked for
+    positions, faces = ribbon_vertices(strips)
+    n = report["lod_skeleton_points"]
+    ribbons = len(positions) // (2 * n)
+    assert len(positions) == 2 * n * ribbons and len(faces) == (n - 1) * ribbons
+    assert ribbons > report["lod_strips"]  # the top strips and their halves
+
+    def shown(positions):
+        per_ribbon = positions.reshape(ribbons, 2 * n, 3)
+        return (np.ptp(per_ribbon, axis=1).max(axis=1) > 0).sum()
+
+    assert shown(positions) == report["lod_strips"]  # the far camera: the top strips drive
+    attribute = strips.data.attributes["lod_level"]
+    level = np.empty(len(attribute.data), dtype=np.float32)
+    attribute.data.foreach_get("value", level)
+    assert (level[: 2 * n * report["lod_strips"]] == 0).all() and level.max() >= 1
+    assert strips.data.materials[0].name == "hairdyn_lod_level"  # coloured by level
+
+    settings.lod_options.show_strips = True
+    assert not strips.hide_render and not strips.hide_viewport
+    settings.lod_options.camera = camera_facing_hair(hair, 0.3, "Close")
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    from hairdyn.cache import Cache
+
+    cache = Cache.open(bake.cache_directory(hair))
+    baked = cache.read_stream("strips", 2)["position"]
+    assert 0 < shown(baked) < report["lod_strips"] * 2  # strips split into clusters
+    bpy.context.scene.frame_set(1)
+    bpy.context.scene.frame_set(2)  # played back from the cache
+    np.testing.assert_array_equal(ribbon_vertices(strips)[0], baked)
+    assert not strips.hide_render
+    settings.lod_options.show_strips = False
+    assert strips.hide_render and strips.hide_viewport

@@ -654,6 +654,33 @@ def write_points(obj, positions_wo, attributes=None):
     if len(mesh.vertices) != count or len(mesh.edges) or len(mesh.polygons):
         mesh.clear_geometry()
         mesh.vertices.add(count)
+    _write_mesh(mesh, positions_wo, attributes)
+
+
+def ribbon_faces(offsets):
+    """(F, 4) int32 quads of ribbons whose vertices lie in pairs, ribbon r's from offsets[r]
+    to offsets[r + 1]: one quad between each pair and the next (2k, 2k + 1, 2k + 3, 2k + 2)."""
+    offsets = np.asarray(offsets, dtype=np.int64)
+    pairs = np.arange(offsets[-1] // 2, dtype=np.int64)
+    last = offsets[1:] // 2 - 1  # each ribbon's last pair starts no quad
+    starts = 2 * np.setdiff1d(pairs, last)
+    return np.stack([starts, starts + 1, starts + 3, starts + 2], axis=1).astype(np.int32)
+
+
+def write_ribbons(obj, positions_wo, offsets, attributes=None):
+    """Ribbons as a mesh of quads (ribbon_faces of the curve offsets, made when the mesh has
+    other counts), plus named point attributes as write_points."""
+    mesh = obj.data
+    faces = ribbon_faces(offsets)
+    if len(mesh.vertices) != len(positions_wo) or len(mesh.polygons) != len(faces):
+        mesh.clear_geometry()
+        mesh.from_pydata(np.asarray(positions_wo, dtype=np.float64).tolist(), [], faces.tolist())
+    _write_mesh(mesh, positions_wo, attributes)
+
+
+def _write_mesh(mesh, positions_wo, attributes):
+    """A mesh's vertex positions (as many as it has) and named point attributes."""
+    count = len(positions_wo)
     positions = np.ascontiguousarray(positions_wo, dtype=np.float32)
     attribute = _position_attribute(mesh)
     if attribute is not None:

@@ -1,9 +1,12 @@
 """Owns: writing a frame's streams into the hair object's output objects (created when
 missing). A stream names the settings pointers that show it (Stream.outputs): curves slots get
-its positions, the point slot a mesh of loose vertices with every array as a point attribute.
-The strands ("frame") show in output_curves and output_points, unless another stream takes
-output_points (LCP's particles).
+its positions, the point slot a mesh of loose vertices with every array as a point attribute,
+the ribbons slot a mesh of quads between each ribbon's vertex pairs. The strands ("frame") show
+in output_curves and output_points, unless another stream takes output_points (LCP's
+particles). A stream recorded with `shown_by` shows its objects while that switch is on.
 """
+
+from operator import attrgetter
 
 import bpy
 
@@ -15,6 +18,7 @@ SLOTS = {
     "output_curves": ("curves", "_hairdyn"),
     "output_children": ("curves", "_hairdyn_children"),
     "output_points": ("points", "_hairdyn_points"),
+    "output_strips": ("ribbons", "_hairdyn_strips"),
 }
 
 
@@ -45,15 +49,24 @@ def write(hair_obj, frame):
                 continue
             target = bridge.ensure_points_output(current, target_name, like=hair_obj)
             setattr(settings, slot, target)
-            bridge.write_points(
-                target,
-                arrays["position"],
-                {key: value for key, value in arrays.items() if key != "position"},
-            )
+            attributes = {key: value for key, value in arrays.items() if key != "position"}
+            if kind == "ribbons":
+                bridge.write_ribbons(target, arrays["position"], offsets, attributes)
+            else:
+                bridge.write_points(target, arrays["position"], attributes)
             if output["billboards"] and settings.use_billboards:
                 billboards.ensure(target, bpy.context.scene.camera)
+            if "shown_by" in output:
+                show_output(target, attrgetter(output["shown_by"])(settings))
     if settings.hide_source_in_renders:  # writing never puts the groom back
         show_source_as_set(hair_obj)
+
+
+def show_output(obj, shown):
+    """An output object in or out of the viewport and renders (changes only what differs)."""
+    for switch in ("hide_viewport", "hide_render"):
+        if getattr(obj, switch) == shown:
+            setattr(obj, switch, not shown)
 
 
 def _in_a_scene(obj):

@@ -119,6 +119,12 @@ class HairdynSettings(bpy.types.PropertyGroup):
         description="Mesh of loose vertices that receives the simulated points and their "
         "attributes every frame (created when empty)",
     )
+    output_strips: PointerProperty(
+        name="Output Strips",
+        type=bpy.types.Object,
+        description="Mesh that receives the level of detail's strips as ribbons every frame "
+        "(created when empty; shown while Strips as Ribbons is on)",
+    )
     cache_directory: StringProperty(
         name="Cache",
         subtype='DIR_PATH',
@@ -251,6 +257,7 @@ _NOT_PARAMETERS = frozenset(
         "use_billboards",
         "output_curves",
         "output_points",
+        "output_strips",
         "hide_source_in_renders",
         "cache_directory",
         "use_cache",

@@ -163,6 +163,30 @@ void bind_lod(py::module_ &m)
           [](py::object self) { return int_view(self.cast<LodSolver &>().strand_nodes(), self); },
           "Per strand (C,) int32: the hierarchy node that drives it.")
       .def_property_readonly(
+          "strip_ribbons",
+          [](const LodSolver &self) {
+            const int64_t vertices = int64_t(self.strip_nodes().size()) * 2 *
+                                     self.hierarchy().skeleton_points_num();
+            MutableSpan<vec3> out;
+            py::array_t<float> array = new_float3(vertices, out);
+            self.strip_ribbons(out);
+            return array;
+          },
+          "Every strip of the hierarchy as a ribbon, (2 n S, 3) float32 world positions: per "
+          "strip (strip_levels' order) and control point k, the skeleton point less (2k) and "
+          "plus (2k + 1) its half width in the strip's current frames; a strip that is not "
+          "active has every vertex at the root of its first strand (no area).")
+      .def_property_readonly(
+          "strip_levels",
+          [](const LodSolver &self) {
+            py::list levels;
+            for (const int32_t node : self.strip_nodes()) {
+              levels.append(self.hierarchy().depth(node));
+            }
+            return levels;
+          },
+          "Per strip of strip_ribbons, its level (depth in the hierarchy).")
+      .def_property_readonly(
           "skeletons_per_level",
           [](const LodSolver &self) {
             py::list counts;

@@ -1,6 +1,7 @@
 #include "lod/lod_solver_ward2003.hh"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -52,6 +53,11 @@ LodSolver::LodSolver(const Span<int32_t> curve_offsets, const Span<vec3> rest_po
   wanted_.assign(size_t(nodes), 0);
   frames_.resize(size_t(nodes * n));
   strand_nodes_.assign(size_t(hierarchy_.strands_num()), 0);
+  for (int32_t node = 0; node < int32_t(nodes); node++) {
+    if (hierarchy_.kind(node) == LodKind::Strip) {
+      strip_nodes_.push_back(node);
+    }
+  }
   const int64_t points = hierarchy_.rest_positions().size();
   positions_wo_.resize(size_t(points));
   residuals_wo_.assign(size_t(points), vec3(0.0f));
@@ -246,6 +252,29 @@ void LodSolver::update_frames()
                               MutableSpan<mat3>(frames_.data() + node * n, n));
     }
   });
+}
+
+void LodSolver::strip_ribbons(const MutableSpan<vec3> r_vertices_wo) const
+{
+  const int32_t n = hierarchy_.skeleton_points_num();
+  assert(r_vertices_wo.size() == int64_t(strip_nodes_.size()) * 2 * n);
+  for (size_t s = 0; s < strip_nodes_.size(); s++) {
+    const int32_t node = strip_nodes_[s];
+    const MutableSpan<vec3> ribbon = r_vertices_wo.slice(int64_t(s) * 2 * n, 2 * n);
+    if (!active_[size_t(node)]) {
+      const int32_t strand = hierarchy_.strands(node)[0];
+      std::fill(ribbon.begin(), ribbon.end(), positions_wo_[hierarchy_.curve_offsets()[strand]]);
+      continue;
+    }
+    const Span<vec3> skeleton = this->skeleton(node);
+    const Span<mat3> frames = this->frames(node), rest_frames = hierarchy_.rest_frames(node);
+    const Span<vec3> half_width = hierarchy_.half_width(node);
+    for (int32_t k = 0; k < n; k++) {
+      const vec3 side = frames[k] * (glm::transpose(rest_frames[k]) * half_width[k]);
+      ribbon[2 * k] = skeleton[k] - side;
+      ribbon[2 * k + 1] = skeleton[k] + side;
+    }
+  }
 }
 
 void LodSolver::take_state(const int32_t node, const Span<vec2> angles, const Span<vec2> rates)

@@ -132,6 +132,15 @@ class LodSolver {
   Span<vec2> angles(int64_t node) const;
   Span<vec2> angular_velocities(int64_t node) const;
 
+  /* The strips as ribbons (Ward & Lin 2003 §3: a strip is a flat surface along its skeleton),
+   * for display: every strip node of the hierarchy (strip_nodes(), in node order), per
+   * control point k two vertices, 2k the skeleton point less its half width and 2k + 1 plus
+   * it, the half width turned from the rest frames into the skeleton's current ones (the
+   * strip's plane bends and twists with it). A strip that is not active lies at the root of
+   * its first strand, all its vertices there: a ribbon of no area, nothing shows. */
+  Span<int32_t> strip_nodes() const { return strip_nodes_; }
+  void strip_ribbons(MutableSpan<vec3> r_vertices_wo) const;
+
   /* Skeletons the last step advanced (the active ones, plus those of the last frame that a
    * switch made inactive), and per level. */
   int64_t stepped_num() const { return solver_->stepped_num(); }
@@ -190,6 +199,7 @@ class LodSolver {
    * (stepped by the last step, or placed since). */
   std::vector<uint8_t> active_, visible_, shown_, current_;
   std::vector<int32_t> wanted_;
+  std::vector<int32_t> strip_nodes_; /* the nodes of kind Strip, in node order */
   /* Per node, select()'s memory of the last frame (the same answers, found sooner): per
    * sampled control point the triangle that hid it (hidden_by_colliders' r_occluder), and
    * the sample that showed the node (tested first). */

@@ -38,16 +38,21 @@ class Stream:
     """A point set a method writes every frame besides the strands: its layout (points,
     columns {name: width} in order, curve offsets for curves), `read()` giving its arrays for
     the current frame, and the output objects that show it: settings pointers such as
-    "output_children" (curves) or "output_points" (points, which then show this stream
-    instead of the strand points); `billboards`: shown as hair cards (Bando 2003 §4)."""
+    "output_children" (curves), "output_points" (points, which then show this stream
+    instead of the strand points) or "output_strips" (ribbons); `billboards`: shown as hair
+    cards (Bando 2003 §4); `shown_by`: the path, from the hair object's settings, of the switch
+    that shows its output objects (else they always show)."""
 
-    def __init__(self, columns, read, points_num, offsets=None, outputs=(), billboards=False):
+    def __init__(
+        self, columns, read, points_num, offsets=None, outputs=(), billboards=False, shown_by=None
+    ):
         self.columns = dict(columns)
         self.read = read
         self.points_num = int(points_num)
         self.offsets = None if offsets is None else np.asarray(offsets, dtype=np.int32)
         self.outputs = tuple(outputs)
         self.billboards = billboards
+        self.shown_by = shown_by
 
     def layout(self):
         """What Cache.create takes for this stream."""
@@ -55,7 +60,10 @@ class Stream:
 
     def output(self):
         """What playback needs to show it again (recorded in the cache manifest)."""
-        return {"outputs": list(self.outputs), "billboards": self.billboards}
+        output = {"outputs": list(self.outputs), "billboards": self.billboards}
+        if self.shown_by is not None:
+            output["shown_by"] = self.shown_by
+        return output
 
 
 class Section:

@@ -22,8 +22,9 @@ import bpy
 import numpy as np
 from bpy.props import BoolProperty, PointerProperty
 
+from .. import outputs
 from ..errors import HairdynError
-from .base import Section, node_material, object_poll
+from .base import Section, Stream, node_material, object_poll
 from .strands import Attached, Extension, NoPasses
 
 NAME = "Level of detail (Ward & Lin 2003)"
@@ -93,6 +94,12 @@ def _color_by_level_changed(options, _context):
     show_levels(options.id_data)
 
 
+def _show_strips_changed(options, _context):
+    strips = options.id_data.hairdyn.output_strips
+    if strips is not None:
+        outputs.show_output(strips, options.show_strips)
+
+
 class HairdynLodOptions(bpy.types.PropertyGroup):
     """Add-on options of the level of detail: the camera it follows, and the fine reference."""
 
@@ -118,6 +125,15 @@ class HairdynLodOptions(bpy.types.PropertyGroup):
         "(the lod_level point attribute, §6.1): red the coarsest strips, green clusters, blue "
         "the finest level. Seen in Material Preview and Rendered shading; the groom's own "
         "materials come back when it is off",
+    )
+    show_strips: BoolProperty(
+        name="Strips as Ribbons",
+        default=False,
+        update=_show_strips_changed,
+        description="Show the strips of the hierarchy that drive hair as ribbons (Ward & Lin "
+        "2003 §3: a strip is a flat surface along its skeleton, as wide as its strands "
+        "spread), coloured by level, in the Output Strips mesh: made with every bake or run "
+        "and hidden until this is on",
     )
 
 
@@ -199,6 +215,11 @@ class LodStrands(Attached):
         self.levels, self.switches, self.errors, self.ms, self.fine_ms = [], 0, [], [], []
         if self.options.color_by_level:
             ensure_level_material(self.solver.finest_level)
+        # The strips as ribbons: two vertices per skeleton point, the strips side by side.
+        levels = np.asarray(self.solver.strip_levels, dtype=np.float32)
+        ribbon = 2 * self.solver.skeleton_points_num
+        self.strip_offsets = np.arange(len(levels) + 1, dtype=np.int32) * ribbon
+        self.strip_levels = np.repeat(levels, ribbon)
 
     def _camera(self):
         camera = self.options.camera or self.scene.camera
@@ -290,6 +311,23 @@ class LodStrands(Attached):
 
     def outputs_written(self, hair_obj):
         show_levels(hair_obj)
+        strips = hair_obj.hairdyn.output_strips
+        if strips is not None and not strips.data.materials:
+            strips.data.materials.append(ensure_level_material(self.solver.finest_level))
+
+    def streams(self):
+        """The strips as ribbons (LodSolver.strip_ribbons, `lod_level` per vertex), shown in
+        output_strips while lod_options.show_strips is on."""
+        return {
+            "strips": Stream(
+                {"position": 3, "lod_level": 1},
+                lambda: {"position": self.solver.strip_ribbons, "lod_level": self.strip_levels},
+                int(self.strip_offsets[-1]),
+                offsets=self.strip_offsets,
+                outputs=("output_strips",),
+                shown_by="lod_options.show_strips",
+            )
+        }
 
     def strand_attributes(self):
         return {"lod_level": np.asarray(self.solver.lod_level, dtype=np.float32)}
@@ -345,6 +383,9 @@ def _draw(layout, settings):
     layout.prop(settings.lod_options, "camera")
     layout.prop(settings.lod_options, "measure_error")
     layout.prop(settings.lod_options, "color_by_level")
+    row = layout.row()
+    row.prop(settings.lod_options, "show_strips")
+    row.prop(settings, "output_strips", text="")
     layout.label(text="Not with volume smoothing or targeting", icon='INFO')
     layout.label(text="Not with pinned points (hairdyn_fixed)", icon='INFO')
 

@@ -53,8 +53,8 @@ class NoPasses(Exception):
 class Attached:
     """An extension at work on one solver: after_step() once per frame, strand_columns and
     strand_attributes() (per strand point arrays for the output Curves and the cache),
-    outputs_written() once a frame is shown in the output objects, frame_baked() once it is in
-    a bake's cache, and its report fields."""
+    streams() of its own (Method.streams), outputs_written() once a frame is shown in the
+    output objects, frame_baked() once it is in a bake's cache, and its report fields."""
 
     strand_columns = {}
     child_columns = {}  # what of strand_columns the child hairs carry too
@@ -67,6 +67,9 @@ class Attached:
 
     def child_attributes(self, children):
         """Per child point arrays for child_columns (children: the native ChildHairs)."""
+        return {}
+
+    def streams(self):
         return {}
 
     def outputs_written(self, hair_obj):
@@ -248,8 +251,9 @@ class Strands(Method):
         return self.solver.positions
 
     def streams(self):
+        streams = {name: s for item in self.attached for name, s in item.streams().items()}
         if self.children is None:
-            return {}
+            return streams
         offsets = np.asarray(self.children.curve_offsets)
         columns = {"position": 3}
         for item in self.attached:
@@ -261,15 +265,14 @@ class Strands(Method):
                 arrays.update(item.child_attributes(self.children))
             return arrays
 
-        return {
-            "children": Stream(
-                columns,
-                read,
-                int(offsets[-1]),
-                offsets=offsets,
-                outputs=("output_children",),
-            )
-        }
+        streams["children"] = Stream(
+            columns,
+            read,
+            int(offsets[-1]),
+            offsets=offsets,
+            outputs=("output_children",),
+        )
+        return streams
 
 
 def register_extension(extension):
