@@ -314,3 +314,18 @@ def test_strips_show_as_ribbons_when_asked_and_play_back(saved_fixture):
     assert not strips.hide_render
     settings.lod_options.show_strips = False
     assert strips.hide_render and strips.hide_viewport
+
+
+def test_ribbons_of_an_earlier_run_hide_once_level_of_detail_is_off(open_fixture):
+    hair = lod_hair(open_fixture)
+    settings = hair.hairdyn
+    settings.lod_options.show_strips = True
+    simulation.run(bpy.context, hair, 1, 1)
+    strips = settings.output_strips
+    assert not strips.hide_render
+    settings.lod.enabled = False
+    simulation.run(bpy.context, hair, 1, 1)
+    assert strips.hide_render and strips.hide_viewport  # no ribbons in this run: none shown
+    settings.lod_options.show_strips = False
+    settings.lod_options.show_strips = True
+    assert strips.hide_render  # still none to show

@@ -3,7 +3,8 @@ missing). A stream names the settings pointers that show it (Stream.outputs): cu
 its positions, the point slot a mesh of loose vertices with every array as a point attribute,
 the ribbons slot a mesh of quads between each ribbon's vertex pairs. The strands ("frame") show
 in output_curves and output_points, unless another stream takes output_points (LCP's
-particles). A stream recorded with `shown_by` shows its objects while that switch is on.
+particles). A stream recorded with `shown_by` shows its objects while that switch is on; the
+ribbons, shown only that way, hide when a frame has none (level of detail turned off).
 """
 
 from operator import attrgetter
@@ -32,6 +33,10 @@ def write(hair_obj, frame):
         if name != STRANDS
         for slot in output["outputs"]
     }
+    for slot, (kind, _) in SLOTS.items():
+        stale = getattr(settings, slot)
+        if kind == "ribbons" and slot not in taken and stale is not None:
+            show_output(stale, False)  # an earlier run's, not this frame's
     for name, (arrays, offsets, output) in frame.items():
         for slot in output["outputs"]:
             if name == STRANDS and slot in taken:

@@ -95,9 +95,9 @@ def _color_by_level_changed(options, _context):
 
 
 def _show_strips_changed(options, _context):
-    strips = options.id_data.hairdyn.output_strips
-    if strips is not None:
-        outputs.show_output(strips, options.show_strips)
+    settings = options.id_data.hairdyn
+    if settings.output_strips is not None:  # an earlier run's ribbons stay hidden without LOD
+        outputs.show_output(settings.output_strips, options.show_strips and settings.lod.enabled)
 
 
 class HairdynLodOptions(bpy.types.PropertyGroup):
