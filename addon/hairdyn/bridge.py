@@ -671,10 +671,11 @@ def write_ribbons(obj, positions_wo, offsets, attributes=None):
     """Ribbons as a mesh of quads (ribbon_faces of the curve offsets, made when the mesh has
     other counts), plus named point attributes as write_points."""
     mesh = obj.data
-    faces = ribbon_faces(offsets)
-    if len(mesh.vertices) != len(positions_wo) or len(mesh.polygons) != len(faces):
+    faces_num = int(offsets[-1]) // 2 - (len(offsets) - 1)  # a quad less than pairs, per ribbon
+    if len(mesh.vertices) != len(positions_wo) or len(mesh.polygons) != faces_num:
+        faces = ribbon_faces(offsets).tolist()
         mesh.clear_geometry()
-        mesh.from_pydata(np.asarray(positions_wo, dtype=np.float64).tolist(), [], faces.tolist())
+        mesh.from_pydata(np.asarray(positions_wo, dtype=np.float64).tolist(), [], faces)
     _write_mesh(mesh, positions_wo, attributes)
 
 
