@@ -316,6 +316,35 @@ def test_strips_show_as_ribbons_when_asked_and_play_back(saved_fixture):
     assert strips.hide_render and strips.hide_viewport
 
 
+def test_outputs_made_again_by_playback_are_dressed_as_simulated_ones(saved_fixture):
+    """Outputs the artist deleted come back from the bake as a simulated frame shows them: the
+    curves coloured by level, the ribbons in the level material (also when its slot was
+    emptied); a frame without level of detail gives the curves the groom's material back."""
+    hair = saved_fixture("head_curves.blend", 2)
+    settings = hair.hairdyn
+    settings.method = 'STRANDS'
+    settings.strands.children_per_guide = 0
+    settings.lod.enabled = True
+    settings.lod_options.color_by_level = settings.lod_options.show_strips = True
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    bpy.data.objects.remove(settings.output_curves)
+    bpy.data.objects.remove(settings.output_strips)
+    bpy.context.scene.frame_set(1)
+    bpy.context.scene.frame_set(2)  # played back into new outputs
+    curves, strips = settings.output_curves, settings.output_strips
+    assert curves is not None and strips is not None and not strips.hide_render
+    assert curves.material_slots[0].link == 'OBJECT'
+    assert curves.material_slots[0].material.name == "hairdyn_lod_level"
+    assert strips.data.materials[0].name == "hairdyn_lod_level"
+    strips.data.materials[0] = None
+    bpy.context.scene.frame_set(1)
+    assert strips.data.materials[0].name == "hairdyn_lod_level"
+    settings.lod.enabled = False
+    simulation.run(bpy.context, hair, 1, 1)
+    assert curves.material_slots[0].link == 'DATA'
+    assert curves.material_slots[0].material == hair.data.materials[0]
+
+
 def test_ribbons_of_an_earlier_run_hide_once_level_of_detail_is_off(open_fixture):
     hair = lod_hair(open_fixture)
     settings = hair.hairdyn

@@ -133,7 +133,7 @@ def load_frame(obj, frame, depsgraph=None):
             stream_offsets[name],
             recorded.get(name, {"outputs": [], "billboards": False}),
         )
-    outputs.write(obj, shown)
+    simulation.show_frame(obj, shown, cache.manifest.get("solver", ""))
     return True
 
 

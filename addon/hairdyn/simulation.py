@@ -72,6 +72,15 @@ def frame_dt(scene):
     return dt
 
 
+def show_frame(hair_obj, frame, method):
+    """A frame, simulated or baked (as outputs.write takes it), in the hair object's output
+    objects, dressed by the method (identifier) that made it (Method.dress_outputs)."""
+    outputs.write(hair_obj, frame)
+    method = methods.get(method)
+    if method is not None:
+        method.dress_outputs(hair_obj, frame)
+
+
 class Simulation:
     """Build at the rest frame (the scene on the first frame to simulate), then step() and
     frame() once per frame."""
@@ -180,10 +189,8 @@ class Simulation:
         return {STRANDS: strands, **self.method.streams()}
 
     def write_outputs(self, frame_data):
-        """Shows `frame_data` (a frame()) in the hair object's output objects; the method may
-        then dress them (Method.outputs_written)."""
-        outputs.write(self.hair_obj, frame_data)
-        self.method.outputs_written(self.hair_obj)
+        """Shows `frame_data` (a frame()) in the hair object's output objects."""
+        show_frame(self.hair_obj, frame_data, self.method.identifier)
 
     def frame(self):
         """{stream name: (arrays, curve offsets or None, output)} of the current frame, what

@@ -171,9 +171,11 @@ class Method:
         """Its own figures for the run's report."""
         return {}
 
-    def outputs_written(self, hair_obj):
+    @classmethod
+    def dress_outputs(cls, hair_obj, frame):
         """After a frame of it was written into the hair object's output objects (they exist
-        from then on)."""
+        from then on), simulated or played back from its bake: what it shows there beyond
+        positions and attributes (materials). frame: what outputs.write took."""
 
     def frame_baked(self, hair_obj, cache, frame):
         """After `frame` was written into the bake's `cache` (files beside it go in

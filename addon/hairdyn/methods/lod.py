@@ -68,16 +68,17 @@ def _level_nodes(nodes, links):
     links.new(add.outputs[0], output.inputs["Surface"])
 
 
-def show_levels(hair_obj):
-    """While lod_options.color_by_level is on, the output curves wear the level material in
-    their first slot as the object's own (the slot linked to the object), so the groom's
-    materials stay in the curves data untouched; off, the slot shows the data's again."""
+def show_levels(hair_obj, has_levels):
+    """While lod_options.color_by_level is on and the output curves show a level-of-detail
+    frame (`has_levels`: it has lod_level), they wear the level material in their first slot
+    as the object's own (the slot linked to the object), so the groom's materials stay in the
+    curves data untouched; otherwise the slot shows the data's again."""
     settings = hair_obj.hairdyn
     output = settings.output_curves
     if output is None or output.type != 'CURVES':
         return
     slots = output.material_slots
-    if settings.lod_options.color_by_level:
+    if settings.lod_options.color_by_level and has_levels:
         material = ensure_level_material()
         if not slots:
             output.data.materials.append(None)
@@ -91,7 +92,24 @@ def show_levels(hair_obj):
 
 
 def _color_by_level_changed(options, _context):
-    show_levels(options.id_data)
+    output = options.id_data.hairdyn.output_curves
+    show_levels(options.id_data, output is not None and "lod_level" in output.data.attributes)
+
+
+def dress(hair_obj, frame):
+    """The output objects of a Strands frame, simulated or played back: the curves coloured by
+    level while Colour by Level is on and the frame is a level-of-detail one, and the strips'
+    ribbons (made again by playback when the artist deleted them) in the level material,
+    unless the artist gave them another."""
+    show_levels(hair_obj, "lod_level" in frame[outputs.STRANDS][0])
+    strips = hair_obj.hairdyn.output_strips
+    if "strips" not in frame or strips is None:
+        return
+    materials = strips.data.materials
+    if not materials:
+        materials.append(ensure_level_material())
+    elif materials[0] is None:
+        materials[0] = ensure_level_material()
 
 
 def _show_strips_changed(options, _context):
@@ -213,8 +231,7 @@ class LodStrands(Attached):
         self.rest_rotation = rotation(build.head_matrix)
         self.root_frames = self.rest_frames
         self.levels, self.switches, self.errors, self.ms, self.fine_ms = [], 0, [], [], []
-        if self.options.color_by_level:
-            ensure_level_material(self.solver.finest_level)
+        ensure_level_material(self.solver.finest_level)  # the scale of its colours
         # The strips as ribbons: two vertices per skeleton point, the strips side by side.
         levels = np.asarray(self.solver.strip_levels, dtype=np.float32)
         ribbon = 2 * self.solver.skeleton_points_num
@@ -309,12 +326,6 @@ class LodStrands(Attached):
 
     # The extension's attached figures.
 
-    def outputs_written(self, hair_obj):
-        show_levels(hair_obj)
-        strips = hair_obj.hairdyn.output_strips
-        if strips is not None and not strips.data.materials:
-            strips.data.materials.append(ensure_level_material(self.solver.finest_level))
-
     def streams(self):
         """The strips as ribbons (LodSolver.strip_ribbons, `lod_level` per vertex), shown in
         output_strips while lod_options.show_strips is on."""
@@ -398,6 +409,7 @@ EXTENSION = Extension(
     defaults={"lod": {"enabled": False}},  # it needs a camera: an artist turns it on
     solver=make_solver,
     label=NAME,
+    dress=dress,
     sections=(
         Section(
             "Level of Detail (Ward & Lin 2003)",

@@ -25,7 +25,9 @@ class Extension:
     defaults (Method.defaults), sections (Section ...), attach(solver, build) adds the pass to
     a built solver and returns an `Attached` (or None when the artist left it off); `solver`,
     when given, is solver(build, strand_params, root_normals) -> a stand-in for the
-    StrandSolver (or None when the artist left it off). `label` names it in messages."""
+    StrandSolver (or None when the artist left it off). `label` names it in messages; `dress`,
+    when given, is dress(hair_obj, frame), the Strands method's dress_outputs for it (it runs on
+    every frame of the method, attached or not: it acts on what it finds in the frame)."""
 
     def __init__(
         self,
@@ -37,8 +39,9 @@ class Extension:
         solver=None,
         defaults=None,
         label=None,
+        dress=None,
     ):
-        self.name, self.attach, self.solver = name, attach, solver
+        self.name, self.attach, self.solver, self.dress = name, attach, solver, dress
         self.params, self.options = dict(params or {}), dict(options or {})
         self.defaults = dict(defaults or {})
         self.sections = tuple(sections)
@@ -53,8 +56,8 @@ class NoPasses(Exception):
 class Attached:
     """An extension at work on one solver: after_step() once per frame, strand_columns and
     strand_attributes() (per strand point arrays for the output Curves and the cache),
-    streams() of its own (Method.streams), outputs_written() once a frame is shown in the
-    output objects, frame_baked() once it is in a bake's cache, and its report fields."""
+    streams() of its own (Method.streams), frame_baked() once a frame is in a bake's cache, and
+    its report fields."""
 
     strand_columns = {}
     child_columns = {}  # what of strand_columns the child hairs carry too
@@ -71,9 +74,6 @@ class Attached:
 
     def streams(self):
         return {}
-
-    def outputs_written(self, hair_obj):
-        pass
 
     def frame_baked(self, hair_obj, cache, frame):
         pass
@@ -232,9 +232,11 @@ class Strands(Method):
     def strand_attributes(self):
         return {k: v for item in self.attached for k, v in item.strand_attributes().items()}
 
-    def outputs_written(self, hair_obj):
-        for item in self.attached:
-            item.outputs_written(hair_obj)
+    @classmethod
+    def dress_outputs(cls, hair_obj, frame):
+        for extension in cls.extensions:
+            if extension.dress is not None:
+                extension.dress(hair_obj, frame)
 
     def frame_baked(self, hair_obj, cache, frame):
         for item in self.attached:
