@@ -1,5 +1,6 @@
 """Bake to a cache on disk, play it back, resume it; bad caches give errors naming files."""
 import json
+import warnings
 from pathlib import Path
 
 import bpy
@@ -169,6 +170,19 @@ def test_cache_of_another_groom_is_an_error(saved_shake):
     playback.forget()
     bpy.context.scene.frame_set(5)
     assert "does not match its manifest" in playback.last_error(hair)
+
+
+def test_a_relative_cache_folder_is_taken_without_a_warning(saved_shake):
+    """Blender 4.5 and later warn when a path property that does not say it takes '//' is
+    given one; the cache folder says so where Blender has the option."""
+    hair, tmp_path = saved_shake
+    hair.hairdyn.frame_end = 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hair.hairdyn.cache_directory = "//elsewhere/"
+    bpy.context.view_layer.objects.active = hair
+    assert bpy.ops.hairdyn.bake() == {'FINISHED'}
+    assert Cache.open(tmp_path / "elsewhere" / "Hair").frames() == [1, 2]
 
 
 def test_unsaved_file_with_relative_cache_is_a_clear_error(empty_scene):

@@ -25,6 +25,13 @@ from .methods.base import object_poll
 
 # Groups not tied to one method: the colliders' maps and response, the wind (core/wind.hh).
 SHARED_PARAMS = {"collision": "CollisionParams", "wind": "WindParams"}
+# A path that may start with // (relative to the .blend): Blender 4.5 and later warn on such a
+# value unless the property says so; 3.4 has no such option.
+RELATIVE_PATH = (
+    {'PATH_SUPPORTS_BLEND_RELATIVE'}
+    if "is_path_supports_blend_relative" in bpy.types.Property.bl_rna.properties
+    else set()
+)
 _registered = []  # the classes register() registered, in order
 _groups = {}  # settings attribute -> PropertyGroup class, as registered
 
@@ -128,6 +135,7 @@ class HairdynSettings(bpy.types.PropertyGroup):
     cache_directory: StringProperty(
         name="Cache",
         subtype='DIR_PATH',
+        options=RELATIVE_PATH,
         default="//hairdyn_cache/",
         description="Folder the bake writes to; // is relative to the .blend file. Each hair "
         "object bakes into a subfolder named after it when it is first baked",
