@@ -281,6 +281,7 @@ def test_strips_show_as_ribbons_when_asked_and_play_back(saved_fixture):
     report = simulation.run(bpy.context, hair, 1, 2)
     strips = settings.output_strips
     assert strips.name == "Hair_hairdyn_strips" and strips.users_scene
+    assert report["output_strips"] == strips.name and report["output_children"] is None
     assert strips.hide_render and strips.hide_viewport  # until asked for
     positions, faces = ribbon_vertices(strips)
     n = report["lod_skeleton_points"]
@@ -353,8 +354,9 @@ def test_ribbons_of_an_earlier_run_hide_once_level_of_detail_is_off(open_fixture
     strips = settings.output_strips
     assert not strips.hide_render
     settings.lod.enabled = False
-    simulation.run(bpy.context, hair, 1, 1)
+    report = simulation.run(bpy.context, hair, 1, 1)
     assert strips.hide_render and strips.hide_viewport  # no ribbons in this run: none shown
+    assert report["output_strips"] is None and report["output_curves"] == "Hair_hairdyn"
     settings.lod_options.show_strips = False
     settings.lod_options.show_strips = True
     assert strips.hide_render  # still none to show

@@ -386,14 +386,14 @@ class Runner:
         """The figures every solver reports (see README, "Headless runs"); the run is over."""
         self.close()
         simulation = self.simulation
+        names = dict.fromkeys(outputs.SLOTS)  # every output object's, None where none was written
+        written = {slot for stream in simulation.streams().values() for slot in stream.outputs}
         try:
-            settings = self.hair_obj.hairdyn
-            outputs = [
-                settings.output_curves.name if settings.output_curves else None,
-                settings.output_points.name if settings.output_points else None,
-            ]
+            for slot in written:
+                output = getattr(self.hair_obj.hairdyn, slot)
+                names[slot] = output.name if output is not None else None
         except ReferenceError:  # the object was deleted: the figures still stand
-            outputs = [None, None]
+            pass
         return {
             "object": self.object_name,
             "solver": simulation.method.identifier.lower(),
@@ -421,8 +421,7 @@ class Runner:
             "collision_ms": float(np.median(self.collision_ms)) if self.collision_ms else 0.0,
             "blender_version": bpy.app.version_string,
             "native_version": simulation.native.__version__,
-            "output_curves": outputs[0],
-            "output_points": outputs[1],
+            **names,
         }
 
 
