@@ -133,7 +133,11 @@ void bind_groom(py::module_ &m)
                                              width);
         const int64_t rows = source.shape(0);
         std::vector<ColumnSpan> columns;
-        for (const py::handle item : outputs) {
+        /* Each item owned while it is read, and each output array until the copy is done: a
+         * sequence may make its items as they are asked for (a numpy array's rows), and a
+         * handle to one that nothing else holds dangled (a crash the fuzz test found). */
+        std::vector<py::array> kept;
+        for (const py::object item : outputs) {
           const py::tuple pair = item.cast<py::tuple>();
           if (pair.size() != 2) {
             fail("each output must be (array, first column)");
@@ -148,6 +152,7 @@ void bind_groom(py::module_ &m)
                  "inside the table");
           }
           columns.push_back({static_cast<float *>(out.mutable_data()), start, out_width});
+          kept.push_back(std::move(out));
         }
         const float *values = static_cast<const float *>(source.data());
         py::gil_scoped_release release;
