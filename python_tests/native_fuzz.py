@@ -70,6 +70,25 @@ rest = np.array(
 )
 vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float32)
 triangles = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], np.int32)
+
+
+def step_arguments():
+    """A frame step's (frame_dt, head_to_world), either of them sometimes hostile: the solvers'
+    step() then runs rather than stopping at its first argument."""
+    dts = [1 / 24, 1 / 24, 1 / 24, 0.0, -1.0, nan, inf, 1e30, 1e-30]
+    turn = np.eye(4)
+    turn[:2, :2] = [[0.0, -1.0], [1.0, 0.0]]
+    heads = [np.eye(4), np.eye(4), turn, np.full((4, 4), nan), np.diag([1e30, 1e30, 1e30, 1.0])]
+    return dts[rng.integers(len(dts))], heads[rng.integers(len(heads))]
+
+
+def lcp_solver():
+    params = n.LcpParams(particle_num=0)
+    particles = n.lcp_particles_from_groom(params, offsets, rest)
+    fields = ("positions", "directions", "u", "v", "s")
+    return n.LcpSolver(params, *(particles[f] for f in fields), np.eye(4))
+
+
 objects = []
 for make in (
     lambda: n.FollowSolver(offsets, rest, np.eye(4)),
@@ -80,6 +99,11 @@ for make in (
         offsets, rest, np.eye(4), np.tile(np.float32([0, 0, 1]), (2, 1)), n.StrandParams()
     ),
     lambda: n.ChildHairs.around_guides(offsets, 2, 0.01, 1),
+    lambda: n.LodSolver(offsets, rest, np.eye(4)),
+    lcp_solver,
+    n.VolumePass,
+    n.HairHairPass,
+    lambda: n.SsvObjectPass(n.ColliderSet([n.Collider(vertices, triangles)])),
 ):
     try:
         objects.append(make())
@@ -97,11 +121,22 @@ for obj in objects:
         for name in dir(obj)
         if not name.startswith("_") and callable(getattr(obj, name))
     ]
+# First, sequences whose items are made as they are read (a numpy array's rows): a binding
+# must own each item while it reads it. A plain run seldom crashes when one does not; under
+# the sanitizers (scripts/test.sh) the read of the freed item stops the run here.
+table = np.zeros((4, 3), np.float32)
+for outputs in (np.zeros((4, 3), np.int32), np.zeros((4, 2), np.float32)):
+    print(f"split_columns(table, {outputs.dtype} array {outputs.shape})", flush=True)
+    try:
+        n.split_columns(table, outputs)
+    except (ValueError, TypeError) as error:
+        assert str(error)
 for _ in range(int(sys.argv[3])):
     target = callables[rng.integers(len(callables))]
     args = [value() for _ in range(rng.integers(0, 7))]
     if rng.random() < 0.5 and len(args) >= 2:  # plausible first arguments, hostile rest
-        args[0], args[1] = (offsets, rest) if rng.random() < 0.5 else (vertices, triangles)
+        plausible = [(offsets, rest), (vertices, triangles), step_arguments()]
+        args[0], args[1] = plausible[rng.integers(len(plausible))]
     label = (
         f"{getattr(target, '__qualname__', target)}({', '.join(type(a).__name__ for a in args)})"
     )
