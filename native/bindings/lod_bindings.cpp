@@ -2,6 +2,8 @@
 #include <cmath>
 #include <string>
 
+#include <pybind11/stl.h>
+
 #include "bindings/arrays.hh"
 #include "bindings/params.hh"
 #include "lod/lod_solver_ward2003.hh"
@@ -179,22 +181,15 @@ void bind_lod(py::module_ &m)
       .def_property_readonly(
           "strip_levels",
           [](const LodSolver &self) {
-            py::list levels;
+            std::vector<int32_t> levels;
             for (const int32_t node : self.strip_nodes()) {
-              levels.append(self.hierarchy().depth(node));
+              levels.push_back(self.hierarchy().depth(node));
             }
             return levels;
           },
           "Per strip of strip_ribbons, its level (depth in the hierarchy).")
       .def_property_readonly(
-          "skeletons_per_level",
-          [](const LodSolver &self) {
-            py::list counts;
-            for (const int64_t count : self.active_per_level()) {
-              counts.append(count);
-            }
-            return counts;
-          },
+          "skeletons_per_level", &LodSolver::active_per_level,
           "Active skeletons at each level (depth 0 .. max_depth) after the last step.")
       .def_property_readonly("active_num", &LodSolver::active_num,
                              "Active skeletons after the last step.")
